@@ -1,0 +1,46 @@
+"""jaxrock: differentiable, vmappable rocking-body simulation (rigid and spring models) in JAX.
+
+Simulations run in float64: importing jaxrock sets `jax_enable_x64` unless the environment
+variable `JAXROCK_X64=0` is set (then inputs and results are float32; see README).
+"""
+
+import os as _os
+
+import jax as _jax
+
+if _os.environ.get("JAXROCK_X64", "1") != "0":
+    _jax.config.update("jax_enable_x64", True)
+
+from ._validate import JaxrockInputError
+from .geometry import G, Block
+from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
+
+__all__ = [
+    "G",
+    "Block",
+    "AbstractExcitation",
+    "RickerPulse",
+    "AntisymmetricRickerPulse",
+    "Record",
+    "JaxrockInputError",
+]
+
+from .results import Save, Solution, Status, status_names
+from .model import AbstractIntegrator, AbstractModel, simulate
+from .rigid import EventIntegrator, RigidModel
+
+__all__ += [
+    "Save",
+    "Solution",
+    "Status",
+    "status_names",
+    "AbstractIntegrator",
+    "AbstractModel",
+    "simulate",
+    "EventIntegrator",
+    "RigidModel",
+]
+
+from .records import el_centro, read_at2, read_record, read_two_column
+
+__all__ += ["el_centro", "read_at2", "read_record", "read_two_column"]

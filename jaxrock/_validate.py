@@ -1,0 +1,72 @@
+"""Input checks that run on concrete values, before anything is traced or compiled.
+
+Every public constructor calls these on its arguments. Under `jax.vmap`/`jax.jit` the values
+are tracers and cannot be inspected; the checks are then skipped (the same values were checked
+when the batch was built outside the transformation, e.g. by `overturning_spectrum`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import numpy as np
+
+
+class JaxrockInputError(ValueError):
+    """Bad input: names the parameter, the value and the valid range."""
+
+
+def is_concrete(x) -> bool:
+    return not any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
+
+
+def _values(x):
+    return np.asarray(x, dtype=float).ravel()
+
+
+def check_range(
+    name: str,
+    x,
+    lo: float = -math.inf,
+    hi: float = math.inf,
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+) -> None:
+    """Raise `JaxrockInputError` unless every value of `x` is finite and in the interval."""
+    if not is_concrete(x):
+        return
+    v = _values(x)
+    lb = "(" if lo_open else "["
+    rb = ")" if hi_open else "]"
+    rng = f"{lb}{lo:g}, {hi:g}{rb}"
+    if v.size == 0:
+        raise JaxrockInputError(f"{name} is empty; expected values in {rng}")
+    bad = ~np.isfinite(v)
+    if math.isfinite(lo) or lo_open:
+        bad |= (v <= lo) if lo_open else (v < lo)
+    if math.isfinite(hi) or hi_open:
+        bad |= (v >= hi) if hi_open else (v > hi)
+    if bad.any():
+        first = v[bad][0]
+        raise JaxrockInputError(f"{name} = {first:g} is outside the valid range {rng}")
+
+
+def check_positive(name: str, x) -> None:
+    check_range(name, x, 0.0, math.inf, lo_open=True, hi_open=True)
+
+
+def check_nonnegative(name: str, x) -> None:
+    check_range(name, x, 0.0, math.inf, hi_open=True)
+
+
+def check_grid(name: str, values, lo: float = 0.0) -> np.ndarray:
+    """A grid axis: non-empty, finite, > lo, strictly increasing."""
+    v = np.asarray(values, dtype=float).ravel()
+    if v.size == 0:
+        raise JaxrockInputError(f"{name} grid is empty; give at least one value > {lo:g}")
+    check_range(name, v, lo, math.inf, lo_open=True, hi_open=True)
+    if v.size > 1 and not np.all(np.diff(v) > 0):
+        raise JaxrockInputError(f"{name} grid must be strictly increasing (got {v[:4]}...)")
+    return v

@@ -1,0 +1,283 @@
+"""Ground excitations as values (pytrees): Ricker pulses (SPEC "Excitations") and sampled records.
+
+Every excitation gives the horizontal ground acceleration üg(t) [m/s²], the window
+[`t_start`, `t_end`] outside which it is negligible (pulses) or zero (records), and
+`next_exceedance(t, level)`: the first time ≥ t at which |üg| exceeds `level` — the uplift time of
+a body at rest (exact: pulses are split into pieces on which |üg| is monotone; records are
+piecewise linear between samples). Excitations are passed to the solvers as arguments, never
+closed over, so a batch of them can be `vmap`ped and differentiated.
+"""
+
+from __future__ import annotations
+
+import abc
+import math
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from ._validate import JaxrockInputError, check_positive, check_range, is_concrete
+from .geometry import G
+
+_BISECTIONS = 64
+
+
+class AbstractExcitation(eqx.Module):
+    """Horizontal ground acceleration üg(t) [m/s²]."""
+
+    @abc.abstractmethod
+    def __call__(self, t) -> Float[Array, ""]:
+        """üg(t) in m/s²."""
+
+    @property
+    @abc.abstractmethod
+    def t_start(self) -> Float[Array, ""]:
+        """Start of the excitation window [s]."""
+
+    @property
+    @abc.abstractmethod
+    def t_end(self) -> Float[Array, ""]:
+        """End of the excitation window [s]; after it the ground is still (to < 1e-13 a_p for pulses)."""
+
+    @property
+    @abc.abstractmethod
+    def max_step(self) -> Float[Array, ""]:
+        """Largest integration step that resolves the excitation [s]."""
+
+    @property
+    @abc.abstractmethod
+    def step_ts(self):
+        """Times where the excitation has kinks (steps are placed on them), or None."""
+
+    @abc.abstractmethod
+    def next_exceedance(self, t, level) -> Float[Array, ""]:
+        """First time τ ≥ t with |üg(τ)| ≥ level (τ = t if it already exceeds); +inf if none."""
+
+
+def _implicit_time(f, tau, level):
+    """Return τ unchanged in value, but with the gradient of the root of |f(τ)| = level.
+
+    τ comes from a bisection (no useful gradient); one Newton step with the root's residual,
+    whose value is ~0, carries the implicit-function derivative dτ = −d(|f| − level)/(d|f|/dt).
+    """
+    tau0 = jax.lax.stop_gradient(tau)
+    val, slope = jax.jvp(lambda s: jnp.abs(f(s)), (tau0,), (jnp.ones_like(tau0),))
+    slope = jax.lax.stop_gradient(slope)
+    safe = jnp.where(jnp.abs(slope) > 0, slope, 1.0)
+    corrected = tau0 - (val - level) / safe
+    # Keep the value exactly τ0; only the tangent of `corrected` is used.
+    return tau0 + (corrected - jax.lax.stop_gradient(corrected))
+
+
+class AbstractRicker(AbstractExcitation):
+    """A Ricker wavelet üg(t) = a_p f(ω_p t) centred at t = 0."""
+
+    a_p: eqx.AbstractVar[Float[Array, ""]]
+    omega_p: eqx.AbstractVar[Float[Array, ""]]
+    # Break points in x = ω_p t (extrema and zeros of f, and the window ends): |f| is monotone on
+    # each piece, so exceedances are found exactly by bisection.
+    _breaks: ClassVar[tuple[float, ...]]
+    _x_cut: ClassVar[float]
+
+    @staticmethod
+    @abc.abstractmethod
+    def shape(x):
+        """Normalised wavelet f(x), x = ω_p t, with max |f| = 1."""
+
+    def __call__(self, t):
+        return self.a_p * self.shape(self.omega_p * t)
+
+    @property
+    def t_start(self):
+        return -self._x_cut / self.omega_p
+
+    @property
+    def t_end(self):
+        return self._x_cut / self.omega_p
+
+    @property
+    def max_step(self):
+        return 0.5 / self.omega_p
+
+    @property
+    def step_ts(self):
+        return None
+
+    def next_exceedance(self, t, level):
+        t = jnp.asarray(t, dtype=float)
+        ell = level / jnp.abs(self.a_p)  # normalised level
+        xb = jnp.asarray(self._breaks)
+        x_now = self.omega_p * t
+        lo = jnp.maximum(xb[:-1], x_now)
+        hi = xb[1:]
+        valid = hi > x_now
+        flo = jnp.abs(self.shape(lo))
+        fhi = jnp.abs(self.shape(hi))
+        already = valid & (flo >= ell)
+        inside = valid & ~already & (fhi >= ell)
+
+        def bisect(_, ab):
+            a, b = ab
+            m = 0.5 * (a + b)
+            up = jnp.abs(self.shape(m)) >= ell
+            return jnp.where(up, a, m), jnp.where(up, m, b)
+
+        a, b = jax.lax.fori_loop(0, _BISECTIONS, bisect, (lo, hi))
+        cand = jnp.where(already, lo, jnp.where(inside, b, jnp.inf))
+        x_up = jnp.min(cand)
+        found = jnp.isfinite(x_up)
+        x_safe = jnp.where(found, x_up, 0.0)
+        was_already = jnp.any(already & (cand == x_up))
+        tau = x_safe / self.omega_p
+        tau = jnp.where(
+            was_already,
+            jnp.maximum(t, tau),
+            _implicit_time(self.__call__, tau, level),
+        )
+        return jnp.where(found, tau, jnp.inf)
+
+
+def _ricker_sym(x):
+    return (1 - x**2 / 2) * jnp.exp(-(x**2) / 4)
+
+
+_BETA = 1.3801  # SPEC eq. 29
+
+
+def _ricker_anti(x):
+    return (x**2 / 3 - 3) * (x / math.sqrt(3)) * jnp.exp(-(x**2) / 6) / _BETA
+
+
+_S6, _S2 = math.sqrt(6.0), math.sqrt(2.0)
+_A1, _A2 = math.sqrt(9 - math.sqrt(54)), math.sqrt(9 + math.sqrt(54))  # extrema of eq. 29
+
+
+def _check_pulse(a_p, omega_p):
+    check_range("a_p (pulse amplitude) [m/s^2]", a_p, -math.inf, math.inf)
+    if is_concrete(a_p) and np.any(np.asarray(a_p) == 0):
+        raise JaxrockInputError("a_p = 0: the pulse amplitude must be non-zero (any sign)")
+    check_positive("omega_p (pulse frequency) [rad/s]", omega_p)
+
+
+class RickerPulse(AbstractRicker):
+    """Symmetric Ricker pulse üg(t) = a_p (1 − ω_p² t²/2) exp(−ω_p² t²/4) (SPEC)."""
+
+    a_p: Float[Array, ""]
+    omega_p: Float[Array, ""]
+    _breaks: ClassVar = (-12.0, -_S6, -_S2, 0.0, _S2, _S6, 12.0)
+    _x_cut: ClassVar = 12.0  # |f(±12)| = 1.7e-14
+
+    def __init__(self, a_p, omega_p):
+        _check_pulse(a_p, omega_p)
+        self.a_p = jnp.asarray(a_p, dtype=float)
+        self.omega_p = jnp.asarray(omega_p, dtype=float)
+
+    @staticmethod
+    def shape(x):
+        return _ricker_sym(x)
+
+
+class AntisymmetricRickerPulse(AbstractRicker):
+    """Antisymmetric Ricker pulse, eq. 29: üg = (a_p/β)(ω_p²t²/3 − 3)(ω_p t/√3) exp(−ω_p²t²/6), β = 1.3801."""
+
+    a_p: Float[Array, ""]
+    omega_p: Float[Array, ""]
+    _breaks: ClassVar = (-15.0, -_A2, -3.0, -_A1, 0.0, _A1, 3.0, _A2, 15.0)
+    _x_cut: ClassVar = 15.0  # |f(±15)| = 2.4e-14
+
+    def __init__(self, a_p, omega_p):
+        _check_pulse(a_p, omega_p)
+        self.a_p = jnp.asarray(a_p, dtype=float)
+        self.omega_p = jnp.asarray(omega_p, dtype=float)
+
+    @staticmethod
+    def shape(x):
+        return _ricker_anti(x)
+
+
+class Record(AbstractExcitation):
+    """A sampled ground-motion record: uniform step `dt` [s], accelerations `acc` [m/s²] from t = 0,
+    linear between samples and zero outside, multiplied by `scale` (an array leaf: vmap over it).
+
+    Read files with `jaxrock.read_record` (PEER `.AT2` or two-column text) or `jaxrock.el_centro()`.
+    """
+
+    acc: Float[Array, " n"]
+    dt: Float[Array, ""]
+    scale: Float[Array, ""]
+    name: str = eqx.field(static=True, default="record")
+
+    def __init__(self, acc, dt, scale=1.0, name: str = "record"):
+        if is_concrete(acc):
+            a = np.asarray(acc, dtype=float)
+            if a.ndim != 1 or a.size < 2:
+                raise JaxrockInputError(f"record acc must be a 1-D array of at least 2 samples, got shape {a.shape}")
+            if not np.all(np.isfinite(a)):
+                k = int(np.flatnonzero(~np.isfinite(a))[0])
+                raise JaxrockInputError(f"record acc has a non-finite value ({a[k]}) at sample {k}; all samples must be finite")
+        check_positive("record dt [s]", dt)
+        check_range("record scale", scale, 0.0, math.inf, hi_open=True)
+        self.acc = jnp.asarray(acc, dtype=float)
+        self.dt = jnp.asarray(dt, dtype=float)
+        self.scale = jnp.asarray(scale, dtype=float)
+        self.name = name
+
+    @property
+    def n(self) -> int:
+        return self.acc.shape[-1]
+
+    @property
+    def times(self):
+        return self.dt * jnp.arange(self.n)
+
+    def scaled(self, factor) -> "Record":
+        """The same record multiplied by `factor` (composes with the current scale)."""
+        return eqx.tree_at(lambda r: r.scale, self, self.scale * jnp.asarray(factor, dtype=float))
+
+    def __call__(self, t):
+        x = t / self.dt
+        k = jnp.clip(jnp.floor(x).astype(jnp.int32), 0, self.n - 2)
+        w = x - k
+        val = (1 - w) * self.acc[k] + w * self.acc[k + 1]
+        # compare times, not x: t_end / dt can round above n − 1 (e.g. n = 2000, dt = 0.02)
+        inside = (t >= 0) & (t <= self.t_end)
+        return jnp.where(inside, self.scale * val, 0.0)
+
+    @property
+    def t_start(self):
+        return jnp.zeros_like(self.dt)
+
+    @property
+    def t_end(self):
+        return self.dt * (self.n - 1)
+
+    @property
+    def max_step(self):
+        return self.dt
+
+    @property
+    def step_ts(self):
+        return self.times
+
+    def next_exceedance(self, t, level):
+        t = jnp.asarray(t, dtype=float)
+        a = jnp.abs(self.scale * self.acc)
+        ts = self.times
+        now = jnp.abs(self(t)) >= level
+        # first sample strictly after t that reaches the level
+        hit = (ts > t) & (a >= level)
+        k = jnp.argmax(hit)
+        found = jnp.any(hit)
+        # crossing of s·üg = level on the linear piece from max(t, t_{k-1}) to t_k, s = sign(üg_k)
+        t_prev = jnp.maximum(ts[jnp.maximum(k - 1, 0)], t)
+        v_k = self.scale * self.acc[k]
+        s = jnp.where(v_k >= 0, 1.0, -1.0)
+        v_prev = s * self(t_prev)
+        rise = s * v_k - v_prev
+        frac = jnp.clip((level - v_prev) / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
+        tau = jnp.where(rise > 0, t_prev + frac * (ts[k] - t_prev), ts[k])
+        return jnp.where(now, t, jnp.where(found, tau, jnp.inf))

@@ -1,0 +1,137 @@
+"""Block geometry: every derived rocking quantity (R, α, p, η, and the extended-base α′, R′, p′, η′)
+is computed here and nowhere else.
+
+Notation (paper section 2, SPEC "Notation"): the column has height `2h` and width `2b`;
+`R = sqrt(h² + b²)`, `α = atan(b/h)`, `p = sqrt(3g/(4R))`, `η = 1 − (3/2) sin²α` (eq. 3, r = η²).
+
+Extended rigid base (paper section 5): the column stands on a rigid, massless base of half-width
+`b′ ≥ b` and rocks about the base's corners: `α′ = atan(b′/h)`, `R′ = sqrt(h² + b′²)`.
+The exact rigid-body inertia about a corner is `I′o = m (R²/3 + R′²)` (parallel axes; SPEC),
+`p′² = m g R′ / I′o` (eq. 23) and `η′ = 1 − 2 m b′²/I′o` (angular-momentum balance about the new
+corner). With `exact_inertia=False` the paper's printed (first-order) inertia eq. 24,
+`I′o = m R²/3 + m R² cosα/cosα′`, is used instead; `p′` then follows eq. 25. Both reduce to the
+plain block when `b′ = b`.
+
+The "rocking" quantities (`alpha_r`, `p_r`, `eta_r`, `R_r`) are those that govern the rigid
+rocking motion: the plain block's for `b′ = b`, the base's otherwise. Spectra are normalised by them.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import equinox as eqx
+from jaxtyping import Array, Float
+
+from ._validate import JaxrockInputError, check_positive, check_range, is_concrete
+
+G = 9.81  # m/s², SPEC
+
+
+class Block(eqx.Module):
+    """A rectangular rocking column (half-height `h`, half-width `b`) on a base of half-width `b_base`.
+
+    Build with `Block.from_size(height, width)` or `Block.from_slenderness(height, tan_alpha)`.
+    Fields are JAX arrays (vmappable, differentiable); `exact_inertia` is structure.
+    """
+
+    h: Float[Array, ""]
+    b: Float[Array, ""]
+    b_base: Float[Array, ""]
+    exact_inertia: bool = eqx.field(static=True, default=True)
+
+    def __check_init__(self):
+        check_positive("h (half-height) [m]", self.h)
+        check_positive("b (half-width) [m]", self.b)
+        check_positive("b_base (base half-width) [m]", self.b_base)
+        if is_concrete((self.b, self.b_base)) and bool(jnp.any(self.b_base < self.b * (1 - 1e-12))):
+            raise JaxrockInputError(
+                f"base half-width b_base = {float(jnp.min(self.b_base)):g} m is narrower than the "
+                f"column half-width b = {float(jnp.max(self.b)):g} m; valid range: b_base >= b"
+            )
+        check_range("tan(alpha_r) = b_base/h", self.b_base / self.h, 0.0, 1.0, lo_open=True, hi_open=True)
+
+    # -- constructors -------------------------------------------------------------------------
+    @classmethod
+    def from_size(cls, height, width, base_width=None, *, exact_inertia: bool = True) -> "Block":
+        """Column of full height `height` (2h) and width `width` (2b) [m]; optional base width (2b′)."""
+        check_positive("height (2h) [m]", height)
+        check_positive("width (2b) [m]", width)
+        h = 0.5 * jnp.asarray(height, dtype=float)
+        b = 0.5 * jnp.asarray(width, dtype=float)
+        bb = b if base_width is None else 0.5 * jnp.asarray(base_width, dtype=float)
+        return cls(h, b, bb, exact_inertia)
+
+    @classmethod
+    def from_slenderness(cls, height, tan_alpha, tan_alpha_base=None, *, exact_inertia: bool = True) -> "Block":
+        """Column of full height `height` (2h) [m] and slenderness `tan_alpha` = b/h ∈ (0, 1)."""
+        check_positive("height (2h) [m]", height)
+        check_range("tan_alpha", tan_alpha, 0.0, 1.0, lo_open=True, hi_open=True)
+        if tan_alpha_base is not None:
+            check_range("tan_alpha_base", tan_alpha_base, 0.0, 1.0, lo_open=True, hi_open=True)
+        h = 0.5 * jnp.asarray(height, dtype=float)
+        b = h * jnp.asarray(tan_alpha, dtype=float)
+        bb = b if tan_alpha_base is None else h * jnp.asarray(tan_alpha_base, dtype=float)
+        return cls(h, b, bb, exact_inertia)
+
+    # -- the column itself --------------------------------------------------------------------
+    @property
+    def height(self):
+        return 2 * self.h
+
+    @property
+    def width(self):
+        return 2 * self.b
+
+    @property
+    def R(self):
+        return jnp.sqrt(self.h**2 + self.b**2)
+
+    @property
+    def alpha(self):
+        return jnp.arctan2(self.b, self.h)
+
+    @property
+    def tan_alpha(self):
+        return self.b / self.h
+
+    @property
+    def p(self):
+        """Frequency parameter p = sqrt(3g/(4R)) of the column [rad/s]."""
+        return jnp.sqrt(3 * G / (4 * self.R))
+
+    @property
+    def eta(self):
+        """Angular-velocity ratio across an impact of the plain block, η = 1 − (3/2) sin²α (eq. 3)."""
+        return 1 - 1.5 * jnp.sin(self.alpha) ** 2
+
+    # -- rocking about the base corners -------------------------------------------------------
+    @property
+    def alpha_r(self):
+        """Rocking slenderness: α′ = atan(b′/h) (α for a plain block)."""
+        return jnp.arctan2(self.b_base, self.h)
+
+    @property
+    def R_r(self):
+        return jnp.sqrt(self.h**2 + self.b_base**2)
+
+    @property
+    def inertia_ratio(self):
+        """I′o / m about a rocking corner [m²]: exact R²/3 + R′², or the paper's eq. 24."""
+        if self.exact_inertia:
+            return self.R**2 / 3 + self.R_r**2
+        return self.R**2 / 3 + self.R**2 * jnp.cos(self.alpha) / jnp.cos(self.alpha_r)
+
+    @property
+    def p_r(self):
+        """p′ = sqrt(m g R′ / I′o) (eq. 23); equals p for a plain block."""
+        return jnp.sqrt(G * self.R_r / self.inertia_ratio)
+
+    @property
+    def eta_r(self):
+        """η′ = 1 − 2 b′²/(I′o/m); equals η = 1 − 1.5 sin²α for a plain block (exact inertia)."""
+        return 1 - 2 * self.b_base**2 / self.inertia_ratio
+
+    @property
+    def uplift_acceleration(self):
+        """Least |üg| that uplifts the rigid block from rest: g tanα′ (eq. 26)."""
+        return G * self.b_base / self.h

@@ -1,0 +1,81 @@
+"""One call shape for every physics pipeline: `simulate(model, excitation, ...)`.
+
+A model is a value (an `eqx.Module` whose array leaves can be vmapped and differentiated) that
+knows its geometry (`block`), its overturning threshold and its default integrator. The
+integrator settings are a separate value; the output request is a `Save` (or nothing: summary only).
+"""
+
+from __future__ import annotations
+
+import abc
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from ._validate import JaxrockInputError, check_range, is_concrete
+from .excitation import AbstractExcitation
+from .geometry import Block
+from .results import Save, Solution
+
+
+class AbstractIntegrator(eqx.Module):
+    """Numerical settings of a model's time integration (tolerances, bounds)."""
+
+
+class AbstractModel(eqx.Module):
+    """A rocking body model: rigid (`RigidModel`) or spring (`SpringModel`)."""
+
+    block: eqx.AbstractVar[Block]
+    threshold: eqx.AbstractVar[float]
+
+    @abc.abstractmethod
+    def default_integrator(self) -> AbstractIntegrator:
+        """The integrator used when `simulate` is given none."""
+
+    @abc.abstractmethod
+    def run(self, excitation: AbstractExcitation, integrator: AbstractIntegrator, save: Save | None, t1) -> Solution:
+        """Integrate from the excitation's start; see `simulate`."""
+
+    @property
+    @abc.abstractmethod
+    def history_fields(self) -> tuple[str, ...]:
+        """Names this model can save in a time history."""
+
+
+def simulate(
+    model: AbstractModel,
+    excitation: AbstractExcitation,
+    *,
+    integrator: AbstractIntegrator | None = None,
+    save: Save | None = None,
+    t1=None,
+) -> Solution:
+    """Simulate one scene. A pure function: `jax.vmap` and `jax.grad` accept it.
+
+    - Without `save`, only the summary is computed and the run stops as soon as the answer is
+      fixed (overturned; at rest after the excitation ended; or excitation over, so that the
+      remaining free-rocking peaks can only decay).
+    - With `save=Save(ts, fields)`, the requested time history is returned and the run goes on to
+      `t1` (default: the last save time).
+    """
+    if not isinstance(model, AbstractModel):
+        raise JaxrockInputError(f"model must be a jaxrock model (RigidModel, SpringModel), got {type(model).__name__}")
+    if not isinstance(excitation, AbstractExcitation):
+        raise JaxrockInputError(
+            f"excitation must be a jaxrock excitation (RickerPulse, AntisymmetricRickerPulse, Record), got {type(excitation).__name__}"
+        )
+    if save is not None:
+        unknown = set(save.fields) - set(model.history_fields)
+        if unknown:
+            raise JaxrockInputError(
+                f"Save fields {sorted(unknown)} are not available for {type(model).__name__}; valid: {model.history_fields}"
+            )
+        if t1 is None:
+            t1 = save.ts[-1]
+        if is_concrete((save.ts, t1, excitation)) and float(jnp.max(save.ts)) > float(t1) + 1e-12:
+            raise JaxrockInputError(f"save times reach {float(jnp.max(save.ts)):g} s, beyond t1 = {float(t1):g} s")
+    if t1 is not None and is_concrete((t1, excitation)):
+        check_range("t1 (end time) [s]", t1, float(excitation.t_start), float("inf"), lo_open=True, hi_open=True)
+    if integrator is None:
+        integrator = model.default_integrator()
+    return model.run(excitation, integrator, save, t1)

@@ -1,0 +1,207 @@
+"""Reading ground-motion records from files into `Record` excitations (accelerations in m/s²).
+
+Two formats are read:
+
+* PEER NGA `.AT2`: four header lines (the second names the event, the fourth gives `NPTS=` and
+  `DT=` [s]), then the accelerations [g] in rows of any length.
+* Two-column text: `time [s]  acceleration` per line, separated by whitespace or a comma, `#`
+  starting a comment; accelerations in g or m/s².
+
+Malformed files raise `JaxrockInputError` naming the file, the line and what is valid.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ._validate import JaxrockInputError
+from .excitation import Record
+from .geometry import G
+
+_UNITS = {"g": G, "m/s2": 1.0}  # factor to m/s²
+_HEADER_LINES = 4
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[Ee][-+]?\d+)?"
+_NPTS = re.compile(r"\bNPTS\s*=\s*([-+]?\d+)", re.IGNORECASE)
+_DT = re.compile(rf"\bDT\s*=\s*({_NUMBER})", re.IGNORECASE)
+_UNIFORM_RTOL = 1e-6
+
+
+def _split_lines(text: str) -> list[str]:
+    """Lines split on newlines only (so '\\r\\r\\n' endings count as one line), right-stripped."""
+    return [line.rstrip() for line in text.split("\n")]
+
+
+def _read_lines(path: Path) -> list[str]:
+    with open(path, encoding="utf-8", errors="replace", newline="") as f:
+        lines = _split_lines(f.read())
+    if not any(lines):
+        raise JaxrockInputError(f"{path}: the file is empty; expected a ground-motion record (.AT2 or two-column text)")
+    return lines
+
+
+def _is_float(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def _parse_row(line: str, lineno: int, source) -> np.ndarray:
+    """The numbers on one line (separated by whitespace or commas), all finite."""
+    tokens = line.replace(",", " ").split()
+    try:
+        row = np.array(tokens, dtype=float)
+    except ValueError:
+        bad = next(t for t in tokens if not _is_float(t))
+        raise JaxrockInputError(
+            f"{source}: line {lineno}: non-numeric token {bad!r}; expected numbers such as -0.0064 or -.6403182E-02"
+        ) from None
+    if not np.all(np.isfinite(row)):
+        bad = tokens[int(np.flatnonzero(~np.isfinite(row))[0])]
+        raise JaxrockInputError(
+            f"{source}: line {lineno}: non-finite value {bad!r}; every value must be a finite number"
+        )
+    return row
+
+
+def _numeric_rows(lines: list[str], first_lineno: int, source, comment: str | None = None):
+    """(line number, numbers) for every non-blank line; text after `comment` is ignored."""
+    rows = []
+    for lineno, line in enumerate(lines, start=first_lineno):
+        if comment is not None:
+            line = line.split(comment, 1)[0]
+        if line.strip():
+            rows.append((lineno, _parse_row(line, lineno, source)))
+    return rows
+
+
+def _header_value(pattern: re.Pattern, key: str, line: str, source) -> str:
+    match = pattern.search(line)
+    if match is None:
+        raise JaxrockInputError(
+            f"{source}: line {_HEADER_LINES}: no numeric {key}= found in {line.strip()!r}; "
+            f"expected e.g. 'NPTS=  4000, DT= .01000 SEC'"
+        )
+    return match.group(1)
+
+
+def _at2_npts_dt(line: str, source) -> tuple[int, float]:
+    """NPTS and DT [s] from the fourth header line of an .AT2 file."""
+    npts = int(_header_value(_NPTS, "NPTS", line, source))
+    dt = float(_header_value(_DT, "DT", line, source))
+    if npts < 2:
+        raise JaxrockInputError(f"{source}: line {_HEADER_LINES}: NPTS = {npts}; a record needs NPTS >= 2 samples")
+    if dt <= 0:
+        raise JaxrockInputError(f"{source}: line {_HEADER_LINES}: DT = {dt:g} s; the time step must be > 0")
+    return npts, dt
+
+
+def read_at2(path: str | os.PathLike, *, name: str | None = None) -> Record:
+    """Read a PEER NGA `.AT2` acceleration file (values in g) into a `Record` in m/s².
+
+    The file has four header lines (the second names the event; the fourth gives the number of
+    samples and the time step [s], as in `NPTS=  4000, DT= .01000 SEC` or `NPTS= 4000 DT= 0.01`),
+    then exactly NPTS accelerations [g], any number per row, in free or Fortran format
+    (`.6403182E-02`, `0.00630`). `name` defaults to the event line (the second header line), or the
+    file's stem when that line is blank.
+    """
+    source = Path(path)
+    lines = _read_lines(source)
+    if len(lines) < _HEADER_LINES:
+        raise JaxrockInputError(
+            f"{source}: only {len(lines)} line(s); an .AT2 file needs {_HEADER_LINES} header lines "
+            f"(the fourth with NPTS= and DT=) followed by the values"
+        )
+    npts, dt = _at2_npts_dt(lines[_HEADER_LINES - 1], source)
+    rows = _numeric_rows(lines[_HEADER_LINES:], _HEADER_LINES + 1, source)
+    values = np.concatenate([row for _, row in rows]) if rows else np.empty(0)
+    if values.size != npts:
+        fewer_more = "fewer" if values.size < npts else "more"
+        raise JaxrockInputError(
+            f"{source}: {values.size} values after the header, {fewer_more} than NPTS = {npts} "
+            f"(line {_HEADER_LINES}); the file must hold exactly NPTS values"
+        )
+    event = lines[1].strip()
+    return Record(values * G, dt, name=name or event or source.stem)
+
+
+def _uniform_step(times: np.ndarray, linenos: list[int], source) -> float:
+    """The mean time step [s] of a strictly increasing time column whose steps all lie within 1e-6
+    (relative) of their median."""
+    steps = np.diff(times)
+    if np.any(steps <= 0):
+        k = int(np.flatnonzero(steps <= 0)[0])
+        raise JaxrockInputError(
+            f"{source}: line {linenos[k + 1]}: time {times[k + 1]:g} s does not exceed the previous "
+            f"{times[k]:g} s; time must be strictly increasing"
+        )
+    typical = np.median(steps)
+    off = np.abs(steps - typical) > _UNIFORM_RTOL * typical
+    if np.any(off):
+        k = int(np.flatnonzero(off)[0])
+        raise JaxrockInputError(
+            f"{source}: line {linenos[k + 1]}: time step {steps[k]:g} s differs from the median step "
+            f"{typical:g} s; time must be uniform (relative tolerance {_UNIFORM_RTOL:g})"
+        )
+    return float((times[-1] - times[0]) / (times.size - 1))
+
+
+def _parse_two_column(lines: list[str], source, units: str, name: str) -> Record:
+    if units not in _UNITS:
+        raise JaxrockInputError(f"units = {units!r} (for {source}); valid units are {sorted(_UNITS)}")
+    rows = _numeric_rows(lines, 1, source, comment="#")
+    for lineno, row in rows:
+        if row.size != 2:
+            raise JaxrockInputError(
+                f"{source}: line {lineno}: {row.size} value(s); expected two columns, time [s] and acceleration"
+            )
+    if len(rows) < 2:
+        raise JaxrockInputError(
+            f"{source}: {len(rows)} data line(s); a record needs at least 2 'time acceleration' lines"
+        )
+    data = np.array([row for _, row in rows])
+    dt = _uniform_step(data[:, 0], [lineno for lineno, _ in rows], source)
+    return Record(data[:, 1] * _UNITS[units], dt, name=name)
+
+
+def read_two_column(path: str | os.PathLike, *, units: str = "g", name: str | None = None) -> Record:
+    """Read a two-column text record, `time [s]  acceleration` per line, into a `Record` in m/s².
+
+    Columns are separated by whitespace or a comma; `#` starts a comment (whole line or trailing);
+    blank lines are skipped. `units` is the acceleration unit: "g" or "m/s2". Time must be
+    strictly increasing and uniform (every step within 1e-6 relative of the median step; the
+    record's `dt` is the mean step). Time may start anywhere: the record is shifted so that its first sample
+    is at t = 0. `name` defaults to the file's stem.
+    """
+    source = Path(path)
+    return _parse_two_column(_read_lines(source), source, units, name or source.stem)
+
+
+def read_record(path: str | os.PathLike, **kw) -> Record:
+    """Read a record file: `.AT2` (any case) with `read_at2`, anything else with `read_two_column`.
+
+    Keyword arguments go to the chosen reader (`name`; `units` for two-column files).
+    """
+    reader = read_at2 if Path(path).suffix.lower() == ".at2" else read_two_column
+    return reader(path, **kw)
+
+
+def el_centro() -> Record:
+    """El Centro 1940 NS ground acceleration (4000 samples at 0.01 s, PGA 0.3129 g), in m/s².
+
+    Imperial Valley earthquake of 19 May 1940, El Centro Array #9 (USGS station 117), component
+    180, as shipped in `jaxrock/data/elcentro_ns_1940.txt` (the same values as
+    `jaxrock/data/IELC180.AT2`). Source: the OpenSees repository (github.com/OpenSees/OpenSees),
+    file `Workshops/OpenSeesDays/IELC180.AT2`, a PEER Strong Motion Database record (processing
+    by Pacific Engineering, band-pass HP = 0.2 Hz, LP = 15 Hz). The record itself is public data
+    of the US Geological Survey's strong-motion program, as processed for the PEER database.
+    """
+    resource = resources.files("jaxrock") / "data" / "elcentro_ns_1940.txt"
+    lines = _split_lines(resource.read_text(encoding="utf-8"))
+    return _parse_two_column(lines, "jaxrock/data/elcentro_ns_1940.txt", "g", "El Centro 1940 NS")

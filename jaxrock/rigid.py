@@ -1,0 +1,386 @@
+"""The rigid rocking model (RM): Housner's equation with impacts, eqs. 1–3 and 22–27.
+
+The motion is a sequence of segments, run by a bounded loop (static bound, reported as
+`Status.max_iterations` if hit):
+
+- **rest** — the block stays at θ = 0 while |üg| < g tanα′; the uplift time is found exactly
+  by `excitation.next_exceedance` and the block uplifts on side s = −sign(üg) (SPEC);
+- **rocking** — eq. 2 (eq. 22 for an extended base) about the corner on side s, integrated by a
+  diffrax solver until one of three `diffrax.Event`s, each located by a Newton root find on the
+  dense output:
+    * impact: sθ crosses 0 downwards → θ set exactly to 0, θ̇ ← η θ̇, side flips (eq. 3, r = η²);
+    * apex: sθ̇ crosses 0 downwards → the exact peak |θ| is recorded (θ̇ set exactly to 0);
+    * overturn: sθ reaches threshold·α′ → overturned, with its time.
+
+Zeno sequences: after an impact with |üg| < g tanα′, the remaining flights form a geometric
+series (velocity ×η per impact, frozen üg, small angles) whose total duration is
+`T_Z = 2v/(1−η²) (1/A_s + η/A_−s)`, `A_s = p² cosα (tanα + s üg/g)`. When `T_Z ≤ zeno_time/p`,
+the block is put to rest (its rest is memoryless: the next uplift only depends on the excitation,
+searched from the impact time), instead of computing the remaining infinitely many impacts.
+
+Stopping when the answer is fixed (no history asked): after the excitation has ended the motion is
+free; energy `E = ½θ̇² + p²(cos(α−|θ|) − cosα)` is conserved between impacts and multiplied by η²
+at each, so the remaining peaks can only decay and the next one is known in closed form:
+`cos(α − θ_peak) = cosα + E/p²` (after one more impact, E → η²E, if the block is moving inwards).
+The run stops there, unless that peak overturns the block, in which case it goes on to find the
+overturning time.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import diffrax
+import equinox as eqx
+import equinox.internal as eqxi
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+from jaxtyping import Array, Float
+
+from ._validate import check_range
+from .excitation import AbstractExcitation
+from .geometry import G, Block
+from .model import AbstractIntegrator, AbstractModel
+from .results import Save, Solution, Status
+
+_REST, _ROCKING, _OVERTURNED = 0, 1, 2
+
+
+class EventIntegrator(AbstractIntegrator):
+    """Settings of the rigid model's event-driven integration.
+
+    - `solver`: an explicit diffrax solver (default `Dopri8`: high order pays at the tight default
+      tolerances; see benchmarks/bench_rigid.py for the work–precision data).
+    - `rtol`, `atol`: step-size control tolerances (on θ [rad] and θ̇ [rad/s]).
+    - `root_tol`: tolerance of the Newton root finds that locate the events [s].
+    - `zeno_time`: Zeno closure threshold, in units of 1/p′ (see module docstring).
+    - `chunk_steps`: length of one loop iteration, in nominal steps. Under `vmap` all lanes move
+      in lock-step, one loop iteration at a time; cutting segments into time windows of about this
+      many steps keeps a lane that chatters through many short segments from making every other
+      lane wait a whole long segment per impact (measured in benchmarks/bench_rigid.py). Windows
+      are cut in time, not by diffrax's `max_steps`: under `vmap`, diffrax 0.7 returns the state
+      of the last *attempted* step for a lane stopped by `max_steps` while another lane had an
+      event, which may be a rejected step.
+    - `max_steps`: bound on steps per window; `max_iterations`: bound on loop iterations
+      (segments + windows) per run; hitting either is reported as a `Status`.
+    """
+
+    solver: diffrax.AbstractSolver = diffrax.Dopri8()
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    root_tol: float = 1e-13
+    zeno_time: float = 1e-4
+    chunk_steps: int = 16
+    max_steps: int = eqx.field(static=True, default=4096)
+    max_iterations: int = eqx.field(static=True, default=20_000)
+
+
+class RigidModel(AbstractModel):
+    """Housner's rigid rocking block (eq. 2), or a rigid column on an extended rigid base (eq. 22).
+
+    - `block`: the geometry (`Block`); the rocking quantities α′, p′, η′ are taken from it.
+    - `eta`: angular-velocity factor across an impact; None → the block's η′ (eq. 3); 1 → undamped.
+    - `threshold`: overturned when |θ| ≥ threshold·α′ (default 1).
+    """
+
+    block: Block
+    eta: Float[Array, ""] | None = None
+    threshold: Float[Array, ""] = 1.0
+
+    def __check_init__(self):
+        if self.eta is not None:
+            check_range("eta (impact velocity ratio)", self.eta, 0.0, 1.0)
+        check_range("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True)
+
+    @property
+    def restitution(self):
+        return self.block.eta_r if self.eta is None else jnp.asarray(self.eta, dtype=float)
+
+    @property
+    def history_fields(self):
+        return ("theta", "omega")
+
+    def default_integrator(self) -> EventIntegrator:
+        return EventIntegrator()
+
+    def acceleration(self, t, theta, side, excitation: AbstractExcitation):
+        """θ̈ about the corner on `side` (±1), eq. 2 / eq. 22."""
+        a, p = self.block.alpha_r, self.block.p_r
+        phi = side * a - theta
+        return -(p**2) * (jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
+
+    def free_peak(self, theta, omega, side):
+        """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side` (see module doc)."""
+        a, p, eta = self.block.alpha_r, self.block.p_r, self.restitution
+        energy = 0.5 * omega**2 + p**2 * (jnp.cos(a - jnp.abs(theta)) - jnp.cos(a))
+        energy = jnp.where(side * omega < 0, eta**2 * energy, energy)
+        c = jnp.cos(a) + energy / p**2
+        peak = (a - jnp.arccos(jnp.clip(c, -1.0, 1.0))) / a
+        return jnp.where(c >= jnp.cos((1 - self.threshold) * a), self.threshold, peak)
+
+    def run(self, excitation, integrator, save, t1):
+        return _run(self, excitation, integrator, save, t1)
+
+
+class _Carry(eqx.Module):
+    t: Array
+    theta: Array
+    omega: Array
+    side: Array
+    mode: Array
+    peak: Array  # max |θ|/α′ so far
+    n_impacts: Array
+    n_segments: Array
+    dt_next: Array  # > 0: continue the current segment with this step (chunked); 0: fresh segment
+    status: Status
+    t_overturn: Array
+    t_uplift: Array
+    finished: Array
+    hist: dict | None
+
+
+def _event_status(result) -> Status:
+    ok = (result == diffrax.RESULTS.successful) | (result == diffrax.RESULTS.event_occurred)
+    steps = result == diffrax.RESULTS.max_steps_reached
+    return Status.where(ok, Status.ok, Status.where(steps, Status.max_steps, Status.solver_failed))
+
+
+class _Machinery(eqx.Module):
+    """The segment loop of one scene, split so that a batch can be advanced in passes (`spectra`)."""
+
+    body: Callable
+    active: Callable
+    c0: _Carry
+    finish: Callable
+
+
+def _run(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, save: Save | None, t1) -> Solution:
+    m = _machinery(model, exc, integ, save, t1)
+    c = eqxi.while_loop(m.active, m.body, m.c0, max_steps=integ.max_iterations, kind="checkpointed")
+    return m.finish(c)
+
+
+# -- resumable runs: used by `overturning_spectrum` to compact a batch between passes -------------
+def start(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator) -> _Carry:
+    return _machinery(model, exc, integ, None, None).c0
+
+
+def advance(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, c: _Carry, n: int) -> _Carry:
+    """Run at most `n` more loop iterations of a summary run."""
+    m = _machinery(model, exc, integ, None, None)
+    return eqxi.while_loop(m.active, m.body, c, max_steps=n, kind="lax")
+
+
+def finish(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, c: _Carry) -> Solution:
+    return _machinery(model, exc, integ, None, None).finish(c)
+
+
+def is_finished(c: _Carry):
+    return c.finished
+
+
+def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, save: Save | None, t1) -> _Machinery:
+    block = model.block
+    alpha, p, eta = block.alpha_r, block.p_r, model.restitution
+    level = block.uplift_acceleration
+    thr = jnp.asarray(model.threshold, dtype=float)
+    summary_only = save is None
+    t_end = exc.t_end
+    t_stop = t_end if summary_only else jnp.asarray(t1, dtype=float)
+    h_nom = jnp.minimum(exc.max_step, 0.05 / p)
+    dtype = jnp.result_type(float)
+
+    def vf(t, y, args):
+        theta, omega = y
+        return omega, model.acceleration(t, theta, args, exc)
+
+    term = diffrax.ODETerm(vf)
+    cond_impact = lambda t, y, args, **kw: args * y[0]
+    cond_apex = lambda t, y, args, **kw: args * y[1]
+    cond_over = lambda t, y, args, **kw: args * y[0] - thr * alpha
+    event = diffrax.Event(
+        [cond_impact, cond_apex, cond_over],
+        root_finder=optx.Newton(rtol=integ.root_tol, atol=integ.root_tol),
+        direction=[False, False, True],
+    )
+    controller = diffrax.PIDController(
+        rtol=integ.rtol, atol=integ.atol, dtmax=exc.max_step, step_ts=exc.step_ts
+    )
+
+    def will_overturn(c: _Carry):
+        return model.free_peak(c.theta, c.omega, c.side) >= thr
+
+    def segment_end(c: _Carry):
+        # Summary runs stop at the end of the excitation unless the free motion overturns.
+        go_on = summary_only & (c.t >= t_end) & will_overturn(c)
+        end = jnp.where(go_on, c.t + 1e4 / p, t_stop)
+        return jnp.maximum(end, c.t)
+
+    def active(c: _Carry):
+        return ~c.finished
+
+    def rest_step(c: _Carry) -> _Carry:
+        t_up = exc.next_exceedance(c.t, level)
+        starts = t_up < t_stop
+        t_new = jnp.where(starts, t_up, c.t)
+        side = -jnp.sign(exc(t_new))
+        hist = c.hist
+        if hist is not None:
+            upto = jnp.where(starts, t_up, t_stop)
+            inwin = (save.ts >= c.t) & (save.ts < upto)
+            hist = {k: jnp.where(inwin, 0.0, v) for k, v in hist.items()}
+        return eqx.tree_at(
+            lambda x: (x.t, x.side, x.mode, x.t_uplift, x.finished, x.hist),
+            c,
+            (
+                t_new,
+                jnp.where(starts, side, c.side),
+                jnp.where(starts, _ROCKING, _REST),
+                jnp.where(starts, jnp.minimum(c.t_uplift, t_up), c.t_uplift),
+                ~starts,
+                hist,
+            ),
+            is_leaf=lambda x: x is None,
+        )
+
+    def rock_step(c: _Carry, is_rocking) -> _Carry:
+        t_seg = jnp.where(is_rocking, segment_end(c), c.t)
+        acc0 = model.acceleration(c.t, c.theta, c.side, exc)
+        at_zero = c.theta == 0
+        dt_flight = 0.05 * jnp.abs(c.omega) / jnp.maximum(jnp.abs(acc0), 1e-300)
+        dt0 = jnp.where(at_zero, jnp.clip(dt_flight, 1e-8 / p, h_nom), h_nom)
+        dt0 = jnp.where(c.dt_next > 0, c.dt_next, dt0)
+        t_win = jnp.minimum(t_seg, c.t + integ.chunk_steps * h_nom)
+        dt0 = jnp.minimum(dt0, jnp.maximum(t_win - c.t, 1e-300))
+        saveat = diffrax.SaveAt(t1=True, dense=not summary_only)
+        sol = diffrax.diffeqsolve(
+            term,
+            integ.solver,
+            c.t,
+            t_win,
+            dt0,
+            (c.theta, c.omega),
+            args=c.side,
+            saveat=saveat,
+            stepsize_controller=controller,
+            event=event,
+            max_steps=integ.max_steps,
+            throw=False,
+        )
+        tf = sol.ts[-1]
+        thf, omf = sol.ys[0][-1], sol.ys[1][-1]
+        hit_impact, hit_apex, hit_over = sol.event_mask
+        hit_impact, hit_apex, hit_over = (hit_impact & is_rocking, hit_apex & is_rocking, hit_over & is_rocking)
+        chunked = is_rocking & ~(hit_impact | hit_apex | hit_over) & (tf < t_seg)
+        n_acc = jnp.maximum(sol.stats["num_accepted_steps"], 1)
+        dt_next = jnp.where(chunked, jnp.maximum((tf - c.t) / n_acc, 1e-8 / p), 0.0)
+        status = _event_status(sol.result)
+        missed = is_rocking & ~hit_impact & (c.side * thf < -1e-6 * alpha)
+        status = Status.where(missed, Status.missed_impact, status)
+        status = Status.where(is_rocking, status, Status.ok)
+
+        hist = c.hist
+        if hist is not None:
+            inwin = is_rocking & (save.ts >= c.t) & (save.ts <= tf)
+            ys = jax.vmap(sol.evaluate)(jnp.clip(save.ts, c.t, tf))
+            new = {"theta": ys[0], "omega": ys[1]}
+            hist = {k: jnp.where(inwin, new[k], v) for k, v in hist.items()}
+            # after overturning, hold the overturning state (the fall itself is not modelled)
+            after = hit_over & (save.ts > tf)
+            hold = {"theta": c.side * thr * alpha, "omega": omf}
+            hist = {k: jnp.where(after, hold[k], v) for k, v in hist.items()}
+
+        # impact (eq. 3)
+        omega_imp = eta * omf
+        side_imp = -c.side
+        s_ug = side_imp * exc(tf) / G
+        a_s = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) + s_ug)
+        a_o = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) - s_ug)
+        v = jnp.abs(omega_imp)
+        both = (a_s > 0) & (a_o > 0)
+        t_zeno = 2 * v / (1 - eta**2 + 1e-300) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
+        zeno = hit_impact & both & (t_zeno * p <= integ.zeno_time)
+
+        peak = jnp.where(hit_apex | (not summary_only), jnp.maximum(c.peak, jnp.abs(thf) / alpha), c.peak)
+        peak = jnp.where(hit_over, thr, peak)
+        theta_new = jnp.where(hit_impact, 0.0, thf)
+        omega_new = jnp.where(hit_impact, jnp.where(zeno, 0.0, omega_imp), jnp.where(hit_apex, 0.0, omf))
+        side_new = jnp.where(hit_impact, side_imp, c.side)
+        mode = jnp.where(hit_over, _OVERTURNED, jnp.where(zeno, _REST, c.mode))
+        no_event = ~(hit_impact | hit_apex | hit_over)
+        bad = status != Status.ok
+        finished = c.finished | hit_over | bad | (is_rocking & no_event & ~chunked & (tf >= t_seg))
+        out = eqx.tree_at(
+            lambda x: (x.t, x.theta, x.omega, x.side, x.mode, x.peak, x.n_impacts, x.dt_next, x.status, x.t_overturn, x.finished, x.hist),
+            c,
+            (
+                jnp.where(is_rocking, tf, c.t),
+                jnp.where(is_rocking, theta_new, c.theta),
+                jnp.where(is_rocking, omega_new, c.omega),
+                jnp.where(is_rocking, side_new, c.side),
+                jnp.where(is_rocking, mode, c.mode),
+                jnp.where(is_rocking, peak, c.peak),
+                c.n_impacts + hit_impact.astype(c.n_impacts.dtype),
+                jnp.where(is_rocking, dt_next, c.dt_next),
+                Status.where(is_rocking, status, c.status),
+                jnp.where(hit_over, tf, c.t_overturn),
+                jnp.where(is_rocking, finished, c.finished),
+                hist,
+            ),
+            is_leaf=lambda x: x is None,
+        )
+        return out
+
+    def body(c: _Carry) -> _Carry:
+        is_rest = c.mode == _REST
+        c = eqx.tree_at(lambda x: x.n_segments, c, c.n_segments + 1)
+        c_rest = rest_step(c)
+        # a block that uplifts in this iteration rocks in the same iteration
+        c = jax.tree_util.tree_map(lambda a, b: jnp.where(is_rest, a, b), c_rest, c)
+        return rock_step(c, (c.mode == _ROCKING) & ~c.finished)
+
+    zero = jnp.zeros((), dtype)
+    hist0 = None if summary_only else {k: jnp.zeros_like(save.ts) for k in save.fields}
+    c0 = _Carry(
+        t=jnp.asarray(exc.t_start, dtype),
+        theta=zero,
+        omega=zero,
+        side=jnp.ones((), dtype),
+        mode=jnp.asarray(_REST),
+        peak=zero,
+        n_impacts=jnp.zeros((), jnp.int32),
+        n_segments=jnp.zeros((), jnp.int32),
+        dt_next=zero,
+        status=Status.ok,
+        t_overturn=jnp.asarray(jnp.inf, dtype),
+        t_uplift=jnp.asarray(jnp.inf, dtype),
+        finished=jnp.asarray(False),
+        hist=hist0,
+    )
+    def finish(c: _Carry) -> Solution:
+        status = Status.where(~c.finished & (c.status == Status.ok), Status.max_iterations, c.status)
+        return _solution(model, c, status, summary_only, save)
+
+    return _Machinery(body, active, c0, finish)
+
+
+def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, save: Save | None) -> Solution:
+    peak = c.peak
+    overturned = c.mode == _OVERTURNED
+    if summary_only:
+        # Free motion after the excitation: the next peak is the last one that matters.
+        still = (c.mode == _ROCKING) & (status == Status.ok)
+        peak = jnp.where(still, jnp.maximum(peak, model.free_peak(c.theta, c.omega, c.side)), peak)
+    return Solution(
+        max_theta=peak,
+        overturned=overturned,
+        t_overturn=c.t_overturn,
+        uplifted=jnp.isfinite(c.t_uplift),
+        t_uplift=c.t_uplift,
+        n_impacts=c.n_impacts,
+        status=status,
+        ts=None if summary_only else save.ts,
+        history=c.hist,
+        n_iterations=c.n_segments,
+    )

@@ -1,0 +1,267 @@
+"""Overturning spectra: max |θ|/α′ over a grid of (ω_p/p′, a_p/(g tanα′)), by `vmap`.
+
+In these coordinates the rigid spectrum depends on α′ only (SPEC "Spectra"). The grid is run in
+batches of `batch_size` cells (memory stays bounded); for the rigid model each batch is advanced
+in passes of a few loop iterations and the cells still running are gathered into a smaller batch
+between passes, so that a few chattering cells near the uplift line do not make the whole batch
+wait for them. A `checkpoint` file keeps finished batches: an interrupted run resumes where it
+stopped.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from tqdm.auto import tqdm
+
+from . import rigid
+from ._validate import JaxrockInputError, check_grid
+from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
+from .geometry import G
+from .model import AbstractIntegrator, AbstractModel, simulate
+from .results import STATUS_NAMES, Solution, Status
+
+PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}
+
+
+class Spectrum(eqx.Module):
+    """A labelled overturning spectrum.
+
+    `max_theta[i, j]` is max |θ|/α′ at `accel_ratio[i]` = a_p/(g tanα′) and `omega_ratio[j]` =
+    ω_p/p′ (the threshold value, 1 by default, where the body overturns).
+    `attrs` describes the scene (model, α′, p′, pulse, ...).
+    """
+
+    omega_ratio: np.ndarray
+    accel_ratio: np.ndarray
+    max_theta: np.ndarray
+    overturned: np.ndarray
+    uplifted: np.ndarray
+    status: np.ndarray
+    attrs: dict
+
+    @property
+    def ok(self) -> bool:
+        return bool(np.all(self.status == 0))
+
+    def _least(self, mask: np.ndarray) -> np.ndarray:
+        has = mask.any(axis=0)
+        first = np.argmax(mask, axis=0)
+        return np.where(has, self.accel_ratio[first], np.nan)
+
+    @property
+    def uplift_boundary(self) -> np.ndarray:
+        """Least a_p/(g tanα′) of the grid that uplifts, per ω_p/p′ column (NaN: none in the grid)."""
+        return self._least(self.uplifted)
+
+    @property
+    def overturn_boundary(self) -> np.ndarray:
+        """Least a_p/(g tanα′) of the grid that overturns, per ω_p/p′ column (NaN: none in the grid)."""
+        return self._least(self.overturned)
+
+    def to_xarray(self):
+        import xarray as xr
+
+        dims = ("accel_ratio", "omega_ratio")
+        ds = xr.Dataset(
+            {
+                "max_theta": (dims, self.max_theta, {"long_name": "max |theta|/alpha", "units": "1"}),
+                "overturned": (dims, self.overturned.astype(np.int8), {"long_name": "overturned (1) or not (0)"}),
+                "uplifted": (dims, self.uplifted.astype(np.int8), {"long_name": "uplifted (1) or not (0)"}),
+                "status": (dims, self.status.astype(np.int32), {"long_name": "jaxrock.Status code", "flag_meanings": " ".join(STATUS_NAMES)}),
+                "uplift_boundary": (("omega_ratio",), self.uplift_boundary, {"long_name": "least a_p/(g tan alpha) that uplifts"}),
+                "overturn_boundary": (("omega_ratio",), self.overturn_boundary, {"long_name": "least a_p/(g tan alpha) that overturns"}),
+            },
+            coords={
+                "omega_ratio": ("omega_ratio", self.omega_ratio, {"long_name": "omega_p/p", "units": "1"}),
+                "accel_ratio": ("accel_ratio", self.accel_ratio, {"long_name": "a_p/(g tan alpha)", "units": "1"}),
+            },
+            attrs={k: (str(v) if not isinstance(v, (int, float, str)) else v) for k, v in self.attrs.items()},
+        )
+        return ds
+
+    def save(self, path) -> Path:
+        """Write a netCDF file (readable by xarray, netCDF tools and `Spectrum.load`)."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.to_xarray().to_netcdf(path, engine="scipy")
+        return path
+
+    @classmethod
+    def load(cls, path) -> "Spectrum":
+        import xarray as xr
+
+        with xr.open_dataset(path, engine="scipy") as ds:
+            return cls(
+                omega_ratio=ds["omega_ratio"].values.copy(),
+                accel_ratio=ds["accel_ratio"].values.copy(),
+                max_theta=ds["max_theta"].values.copy(),
+                overturned=ds["overturned"].values.astype(bool),
+                uplifted=ds["uplifted"].values.astype(bool),
+                status=ds["status"].values.astype(np.int32),
+                attrs=dict(ds.attrs),
+            )
+
+
+# -- batched runs ---------------------------------------------------------------------------------
+_PASS_ITERATIONS = 24
+
+
+def _bucket(n: int, batch: int) -> int:
+    """Pad sizes to a few fixed values so the compiled pass is reused (full batch, or 1/16 of it)."""
+    small = max(1, batch // 16)
+    return small if n <= small else batch
+
+
+@eqx.filter_jit
+def _start(model, integ, exc):
+    return jax.vmap(lambda e: rigid.start(model, e, integ))(exc)
+
+
+@eqx.filter_jit
+def _advance(model, integ, exc, carry):
+    return jax.vmap(lambda e, c: rigid.advance(model, e, integ, c, _PASS_ITERATIONS))(exc, carry)
+
+
+@eqx.filter_jit
+def _finish(model, integ, exc, carry):
+    return jax.vmap(lambda e, c: rigid.finish(model, e, integ, c))(exc, carry)
+
+
+@eqx.filter_jit
+def _simulate_batch(model, integ, exc):
+    return jax.vmap(lambda e: simulate(model, e, integrator=integ))(exc)
+
+
+def _rigid_batch(model, excitations, integ) -> Solution:
+    """Run a batch of rigid scenes with compaction between passes (identical results to simulate)."""
+    n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
+    # The carry lives on the host between passes: gathers and scatters of changing sizes in numpy
+    # cost nothing, where in JAX each new size would compile.
+    tree_np = lambda t: jax.tree_util.tree_map(np.array, t)
+    carry = tree_np(_start(model, integ, excitations))
+    exc_np = tree_np(excitations)
+    used = 0
+    while used < integ.max_iterations:
+        todo = np.flatnonzero(~np.asarray(rigid.is_finished(carry)))
+        if todo.size == 0:
+            break
+        size = _bucket(todo.size, n)
+        for lo in range(0, todo.size, size):
+            idx = todo[lo : lo + size]
+            padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
+            sub_e = jax.tree_util.tree_map(lambda x: x[padded], exc_np)
+            sub_c = jax.tree_util.tree_map(lambda x: x[padded], carry)
+            sub_c = tree_np(_advance(model, integ, sub_e, sub_c))
+
+            def put(x, y):
+                x[idx] = y[: idx.size]
+                return x
+
+            carry = jax.tree_util.tree_map(put, carry, sub_c)
+        used += _PASS_ITERATIONS
+    return _finish(model, integ, excitations, carry)
+
+
+def run_batch(model: AbstractModel, excitations: AbstractExcitation, integrator: AbstractIntegrator | None = None) -> Solution:
+    """Summaries of a batch of scenes (`excitations` has a leading batch axis on every array leaf)."""
+    integ = model.default_integrator() if integrator is None else integrator
+    if isinstance(model, rigid.RigidModel):
+        return _rigid_batch(model, excitations, integ)
+    return _simulate_batch(model, integ, excitations)
+
+
+def _pulse_class(pulse):
+    if isinstance(pulse, str):
+        if pulse not in PULSES:
+            raise JaxrockInputError(f"pulse = {pulse!r}; valid: {sorted(PULSES)}")
+        return PULSES[pulse]
+    return pulse
+
+
+def overturning_spectrum(
+    model: AbstractModel,
+    omega_ratio,
+    accel_ratio,
+    *,
+    pulse="symmetric",
+    integrator: AbstractIntegrator | None = None,
+    batch_size: int = 4096,
+    progress: bool = True,
+    checkpoint: str | os.PathLike | None = None,
+) -> Spectrum:
+    """max |θ|/α′ of `model` over the grid `accel_ratio` (a_p/(g tanα′)) × `omega_ratio` (ω_p/p′).
+
+    - `pulse`: "symmetric" (Ricker) or "antisymmetric" (eq. 29).
+    - `batch_size`: cells run together in one vmapped batch (memory bound).
+    - `checkpoint`: a file (.npz) where finished batches are kept; rerunning the same call after an
+      interruption resumes from it, and it is removed when the spectrum is complete.
+    """
+    wr = check_grid("omega_ratio (omega_p/p)", omega_ratio)
+    ar = check_grid("accel_ratio (a_p/(g tan alpha))", accel_ratio)
+    if int(batch_size) < 1:
+        raise JaxrockInputError(f"batch_size = {batch_size}; valid: an integer >= 1")
+    cls = _pulse_class(pulse)
+    block = model.block
+    p, tan_a = float(block.p_r), float(jnp.tan(block.alpha_r))
+    W, A = np.meshgrid(wr, ar)
+    a_p = (A * G * tan_a).ravel()
+    w_p = (W * p).ravel()
+    n = a_p.size
+    fields = ("max_theta", "overturned", "uplifted", "status")
+    out = {k: np.zeros(n, dtype=float if k == "max_theta" else (np.int32 if k == "status" else bool)) for k in fields}
+    done = np.zeros(n, dtype=bool)
+    ck = Path(checkpoint) if checkpoint is not None else None
+    key = np.concatenate([a_p, w_p])
+    if ck is not None and ck.exists():
+        saved = np.load(ck)
+        if saved["key"].shape == key.shape and np.array_equal(saved["key"], key):
+            done = saved["done"]
+            for k in fields:
+                out[k] = saved[k]
+    batch_size = int(batch_size)
+    starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
+    bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
+    for s in starts:
+        sl = slice(s, min(s + batch_size, n))
+        exc = jax.vmap(cls)(jnp.asarray(a_p[sl]), jnp.asarray(w_p[sl]))
+        sol = run_batch(model, exc, integrator)
+        out["max_theta"][sl] = np.asarray(sol.max_theta)
+        out["overturned"][sl] = np.asarray(sol.overturned)
+        out["uplifted"][sl] = np.asarray(sol.uplifted)
+        out["status"][sl] = np.asarray(sol.status._value)
+        done[sl] = True
+        if ck is not None:
+            ck.parent.mkdir(parents=True, exist_ok=True)
+            tmp = ck.with_suffix(".tmp.npz")
+            np.savez(tmp, key=key, done=done, **out)
+            os.replace(tmp, ck)
+        bar.update(sl.stop - sl.start)
+    bar.close()
+    if ck is not None and ck.exists():
+        ck.unlink()
+    shape = (ar.size, wr.size)
+    attrs = {
+        "model": type(model).__name__,
+        "pulse": cls.__name__,
+        "tan_alpha": tan_a,
+        "alpha": float(block.alpha_r),
+        "p": p,
+        "height": float(block.height),
+        "width": float(block.width),
+    }
+    return Spectrum(
+        omega_ratio=wr,
+        accel_ratio=ar,
+        max_theta=out["max_theta"].reshape(shape),
+        overturned=out["overturned"].reshape(shape),
+        uplifted=out["uplifted"].reshape(shape),
+        status=out["status"].reshape(shape),
+        attrs=attrs,
+    )

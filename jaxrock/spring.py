@@ -1,0 +1,767 @@
+"""The nonlinear-elastic, viscously damped spring model (SM) of the paper (sections 3–6).
+
+Two scenes share one model value, `SpringModel`:
+
+- quasi-rigid (``column=None``): the one-DOF rigid SM, eq. 10 with the damper (SPEC)
+  ``Itot θ̈ + c θ̇ + M(θ) − m g h sinθ = −m üg h cosθ``, ``h = R cosα``; no mesh is built.
+- flexible (``column=Column(...)``): a corotational Euler–Bernoulli column of ``n_elements``
+  elements (`jaxrock.beam`) on the rotational spring, gravity preloaded, stiffness-proportional
+  Rayleigh damping on the column's deformation (section 4).
+
+Base spring (section 3, Figure 2 right, smoothed): ``M(θ) = My tanh(θ/θs)``, elastic (it unloads
+along its loading path), ``My = m g R′ sinα′ = m g b′`` (b′ = b for a plain block), with the
+potential ``My θs log cosh(θ/θs)``. ``θs = smoothing · α′``; the pre-yield stiffness is
+``My/θs``. Damper in parallel: ``c = c̄ m g^0.5 R′^1.5`` (eqs. 17–18), by default with
+``c̄ = 0.02 (α′/0.1)²`` (eq. 17). For an extended base the rocking quantities α′, R′ are used
+in eq. 17/18, because the damper stands for the impact losses at the base's corners, which are
+governed by α′ (the paper: "computed using Equation (17)"); give ``cbar`` to override.
+
+Inertia: without added masses ``Itot = (4/3) m h²`` (the column about its base centre, eq. 11);
+with added masses ``Itot = I′o = m·Block.inertia_ratio`` (exact parallel-axis value, = (4/3) m R²
+for a plain block), i.e. ``ΔI = I′o − (4/3) m h²`` spread evenly over the ``n + 1`` column nodes.
+
+Forces are gradients of energies (`jax.grad`), so the energy balance holds by construction.
+
+Time integration: diffrax ESDIRK (Kvaerno5 by default, L-stable: the spring's pre-yield branch
+and the E = 10¹⁴ Pa column are stiff) with a PID step-size controller and a component-scaled
+absolute tolerance. Events: overturning ``|θ| ≥ threshold·α′`` (root-found). The peak
+``max |θ|`` is exact to the solver tolerance: the base rotation and velocity are recorded at every
+accepted step and the cubic Hermite interpolant (θ, θ̇ at both ends, fourth-order accurate) is
+maximised in closed form on each step — cheaper than an event on θ̇ = 0 with restarts, and
+differentiable (no `while_loop` over segments, so `jax.grad` works).
+
+Summary runs stop when the answer is fixed: phase 1 runs over the excitation window; phase 2 runs
+free motion until the mechanical energy falls below the potential at the largest rotation seen so
+far — after which |θ| can never reach that rotation again (exact for the one-DOF model, whose
+potential is monotone in |θ| below the barrier; for the flexible model the rigid-rotation
+potential is used with a 10 % margin for the flexural P-Δ softening) — or it overturns, or
+`t1` (default: excitation end + 20 rocking periods 2π/p′) is reached.
+"""
+
+from __future__ import annotations
+
+import math
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+from diffrax import with_stepsize_controller_tols
+from jaxtyping import Array, Float
+
+from . import beam
+from ._validate import JaxrockInputError, check_nonnegative, check_positive, check_range, is_concrete
+from .excitation import AbstractExcitation
+from .geometry import G, Block
+from .model import AbstractIntegrator, AbstractModel
+from .results import Save, Solution, Status
+
+# θs/α′ default: see `benchmarks/bench_spring.py` (work–precision study). At 1e-3 the smoothing
+# changes max|θ|/α by ~1e-3 (it shifts the potential by My θs ln2), below the SM-vs-RM modelling
+# error, and costs ~1.5× the steps of 1e-2; below 1e-4 the cost keeps growing for no gain.
+DEFAULT_SMOOTHING = 1e-3
+UPLIFT_FACTOR = 3.0  # uplifted: |θ| > 3 θs, i.e. the spring moment passed tanh(3) = 99.5 % of My
+QUASI_RIGID_RHO = 2500.0  # kg/m³: mass of the quasi-rigid scene (results do not depend on it)
+
+HISTORY_FIELDS = (
+    "theta",
+    "omega",
+    "u_top",
+    "w_top",
+    "base_moment",
+    "kinetic",
+    "potential",
+    "dissipated",
+    "input",
+)
+_ENERGY_FIELDS = ("kinetic", "potential", "dissipated", "input")
+
+
+# ----------------------------------------------------------------------------------------------
+# closed-form helpers
+# ----------------------------------------------------------------------------------------------
+def cbar_eq17(alpha):
+    """Eq. 17: c̄ = c/(m g^0.5 R^1.5) = 0.02 (α/0.1)² (α in rad)."""
+    return 0.02 * (jnp.asarray(alpha, dtype=float) / 0.1) ** 2
+
+
+def first_period_eq21(h, tan_alpha, E, rho):
+    """Eq. 21: first fixed-base period of a solid rectangular column, T₁ = 12.38 sqrt(ρ/E) h/tanα [s]
+    (h: half-height)."""
+    return 12.38 * jnp.sqrt(jnp.asarray(rho, dtype=float) / E) * h / tan_alpha
+
+
+def pushover_eq9(theta, alpha):
+    """Eq. 9: SM pushover F/(m g) = tanα/cosθ − tanθ (force at the column's mid-height)."""
+    return jnp.tan(alpha) / jnp.cos(theta) - jnp.tan(theta)
+
+
+def _logcosh(x):
+    ax = jnp.abs(x)
+    return ax + jnp.log1p(jnp.exp(-2 * ax)) - math.log(2.0)
+
+
+# ----------------------------------------------------------------------------------------------
+# column values
+# ----------------------------------------------------------------------------------------------
+class Column(eqx.Module):
+    """Linear elastic column: Young's modulus E [Pa], density ρ [kg/m³], and optionally the
+    section area A [m²] and second moment I [m⁴] (per the model's out-of-plane thickness).
+    Without A, I the section is the block's solid rectangle 2b × 1 m: A = 2b, I = (2b)³/12."""
+
+    E: Float[Array, ""]
+    rho: Float[Array, ""]
+    A: Float[Array, ""] | None = None
+    I: Float[Array, ""] | None = None
+
+    def __init__(self, E, rho=2500.0, A=None, I=None):
+        check_positive("E (Young's modulus) [Pa]", E)
+        check_positive("rho (density) [kg/m^3]", rho)
+        if (A is None) != (I is None):
+            raise JaxrockInputError("give both the section area A and its second moment I, or neither")
+        if A is not None:
+            check_positive("A (section area) [m^2]", A)
+            check_positive("I (section second moment) [m^4]", I)
+        self.E = jnp.asarray(E, dtype=float)
+        self.rho = jnp.asarray(rho, dtype=float)
+        self.A = None if A is None else jnp.asarray(A, dtype=float)
+        self.I = None if I is None else jnp.asarray(I, dtype=float)
+
+    @classmethod
+    def concrete(cls, A=None, I=None) -> "Column":
+        """E = 30 GPa, ρ = 2500 kg/m³ (paper sections 4–6)."""
+        return cls(30e9, 2500.0, A, I)
+
+    @classmethod
+    def quasi_rigid(cls, rho=2500.0) -> "Column":
+        """E = 10¹⁴ Pa (paper section 3: 'quasi-rigid' FE column)."""
+        return cls(1e14, rho)
+
+    def section(self, block: Block):
+        if self.A is None:
+            w = 2 * block.b
+            return w, w**3 / 12
+        return self.A, self.I
+
+
+# ----------------------------------------------------------------------------------------------
+# the prepared mechanics (arrays computed once per run)
+# ----------------------------------------------------------------------------------------------
+class _Mechanics(eqx.Module):
+    """Everything a right-hand side needs, computed once (mass matrix inverse, preload, Rayleigh
+    coefficient). Built by `SpringModel.mechanics()`."""
+
+    n: int | None = eqx.field(static=True)  # None: one-DOF quasi-rigid
+    fixed_base: bool = eqx.field(static=True)
+    track_energy: bool = eqx.field(static=True)
+    h: Array
+    m: Array
+    My: Array
+    theta_s: Array
+    c: Array
+    alpha_r: Array
+    p_r: Array
+    R_r: Array
+    Itot: Array  # one-DOF inertia (also used for the rigid potential of the flexible model)
+    EA: Array | None
+    EI: Array | None
+    a1: Array | None
+    M: Array | None
+    Minv: Array | None
+    q_eq: Array | None
+    V_eq: Array | None
+    r: Array | None
+
+    @property
+    def ndof(self) -> int:
+        return 1 if self.n is None else beam.n_dof(self.n)
+
+    # -- energies -------------------------------------------------------------------------------
+    def spring_potential(self, theta):
+        return self.My * self.theta_s * _logcosh(theta / self.theta_s)
+
+    def spring_moment(self, theta):
+        return self.My * jnp.tanh(theta / self.theta_s)
+
+    def _column_potential(self, q):
+        """Gravity (+ strain) potential of the column, spring excluded."""
+        if self.n is None:
+            return self.m * G * self.h * (jnp.cos(q[0]) - 1.0)
+        V = beam.strain_energy(q, self.h, self.n, self.EA, self.EI)
+        V = V + beam.gravity_potential(q, self.h, self.n, self.m)
+        return V
+
+    def potential(self, q):
+        """Total potential relative to the (preloaded) rest state [J]."""
+        V = self._column_potential(q)
+        if not self.fixed_base:
+            V = V + self.spring_potential(q[0])
+        if self.n is not None:
+            V = V - self.V_eq
+        return V
+
+    def rigid_potential(self, theta):
+        """One-DOF SM potential at zero velocity (exact for the quasi-rigid scene):
+        My θs log cosh(θ/θs) − m g h (1 − cosθ) → SPEC's E(θ) = m g R(sinα|θ| − cosα(1 − cosθ))
+        as θs → 0 (for a plain block, My = m g R sinα and h = R cosα)."""
+        return self.spring_potential(theta) - self.m * G * self.h * (1 - jnp.cos(theta))
+
+    def kinetic(self, v):
+        if self.n is None:
+            return 0.5 * self.Itot * v[0] ** 2
+        return 0.5 * v @ (self.M @ v)
+
+    # -- forces -----------------------------------------------------------------------------------
+    def _column_damping(self, q, v):
+        """Rayleigh force a₁ Jᵀ K_e J v on the local deformations (never on rigid motion)."""
+        f = lambda qq: beam.element_deformations(qq, self.h, self.n)
+        d, d_dot = jax.jvp(f, (q,), (v,))
+        Kd = beam.deformation_energy_rate_matrix(d_dot, self.h, self.n, self.EA, self.EI)
+        _, vjp = jax.vjp(f, q)
+        (fd,) = vjp(Kd)
+        return self.a1 * fd
+
+    def forces(self, t, q, v, excitation):
+        """(f_total, f_ext, f_damp, f_nospring): generalised forces [N, N·m]."""
+        ug = excitation(t)
+        if self.n is None:
+            f_ext = jnp.atleast_1d(-self.m * ug * self.h * jnp.cos(q[0]))  # eq. 10 right-hand side
+            f_col = -jax.grad(self._column_potential)(q)
+            f_dcol = jnp.zeros_like(q)
+        else:
+            f_ext = -ug * (self.M @ self.r)
+            f_col = -jax.grad(self._column_potential)(q)
+            f_dcol = self._column_damping(q, v)
+        f_nospring = f_ext + f_col - f_dcol
+        if self.fixed_base:
+            f_sp = jnp.zeros_like(q)
+        else:
+            f_sp = jnp.zeros_like(q).at[0].set(self.spring_moment(q[0]) + self.c * v[0])
+        f_damp = f_dcol + jnp.zeros_like(q).at[0].set(0.0 if self.fixed_base else self.c * v[0])
+        return f_nospring - f_sp, f_ext, f_damp, f_nospring
+
+    def base_moment(self, t, q, v, excitation):
+        """Spring + damper moment M(θ) + c θ̇ [N·m]; for a fixed base the reaction moment."""
+        if self.fixed_base:
+            return self.forces(t, q, v, excitation)[3][0]
+        return self.spring_moment(q[0]) + self.c * v[0]
+
+    # -- first-order form -------------------------------------------------------------------------
+    def split(self, y):
+        N = self.ndof
+        return y[:N], y[N : 2 * N]
+
+    def vector_field(self, t, y, excitation):
+        q, v = self.split(y)
+        f, f_ext, f_damp, _ = self.forces(t, q, v, excitation)
+        if self.n is None:
+            a = f / self.Itot
+        else:
+            a = self.Minv @ f
+        if self.fixed_base:
+            a = a.at[0].set(0.0)
+        parts = [v, a]
+        if self.track_energy:
+            parts.append(jnp.stack([v @ f_damp, v @ f_ext]))
+        return jnp.concatenate(parts)
+
+    def initial_state(self, theta0=0.0, omega0=0.0):
+        theta0 = jnp.asarray(theta0, dtype=float)
+        omega0 = jnp.asarray(omega0, dtype=float)
+        if self.n is None:
+            q = jnp.atleast_1d(theta0)
+            v = jnp.atleast_1d(omega0)
+        else:
+            x, y, phi = beam.positions(self.q_eq, self.h, self.n)
+            c, s = jnp.cos(theta0), jnp.sin(theta0)
+            # clockwise rigid rotation about the base (top moves to +x for θ0 > 0)
+            xr, yr = x * c + y * s, -x * s + y * c
+            q = beam.from_positions(xr, yr, phi + theta0, self.h, self.n)
+            # rigid angular velocity ω0: ẋ = ω0 y, ẏ = −ω0 x, φ̇ = ω0
+            v = beam.from_positions(omega0 * yr, -omega0 * xr + beam.node_heights(self.h, self.n), jnp.full_like(phi, omega0), self.h, self.n)
+        y0 = [q, v]
+        if self.track_energy:
+            y0.append(jnp.zeros(2))
+        return jnp.concatenate(y0)
+
+    def atol_scale(self):
+        """Per-component scale of the absolute tolerance: α′ for rotations, 2h α′ for
+        displacements, × p′ for velocities, m g R′ α′ for the energy integrals."""
+        if self.n is None:
+            sq = jnp.ones(1) * self.alpha_r
+        else:
+            unit = jnp.tile(jnp.array([2.0, 2.0, 0.0]), self.n)
+            sq = jnp.concatenate([jnp.zeros(1), unit])
+            sq = jnp.where(sq > 0, self.h * sq, 1.0) * self.alpha_r
+        parts = [sq, sq * self.p_r]
+        if self.track_energy:
+            parts.append(jnp.ones(2) * self.m * G * self.R_r * self.alpha_r)
+        return jnp.concatenate(parts)
+
+    def mechanical_energy(self, y):
+        q, v = self.split(y)
+        return self.kinetic(v) + self.potential(q)
+
+    def history(self, t, y, excitation, fields):
+        q, v = self.split(y)
+        theta, omega = q[0], v[0]
+        out = {}
+        for name in fields:
+            if name == "theta":
+                out[name] = theta
+            elif name == "omega":
+                out[name] = omega
+            elif name == "u_top":
+                out[name] = 2 * self.h * jnp.sin(theta) if self.n is None else beam.top_displacement(q, self.h, self.n)
+            elif name == "w_top":
+                u = 2 * self.h * jnp.sin(theta) if self.n is None else beam.top_displacement(q, self.h, self.n)
+                out[name] = u - 2 * self.h * jnp.sin(theta)
+            elif name == "base_moment":
+                out[name] = self.base_moment(t, q, v, excitation)
+            elif name == "kinetic":
+                out[name] = self.kinetic(v)
+            elif name == "potential":
+                out[name] = self.potential(q)
+            elif name == "dissipated":
+                out[name] = y[-2]
+            elif name == "input":
+                out[name] = y[-1]
+        return out
+
+
+# ----------------------------------------------------------------------------------------------
+# integrator
+# ----------------------------------------------------------------------------------------------
+_SOLVERS = {"kvaerno3": diffrax.Kvaerno3, "kvaerno4": diffrax.Kvaerno4, "kvaerno5": diffrax.Kvaerno5}
+
+
+class SpringIntegrator(AbstractIntegrator):
+    """diffrax settings of the spring model: an L-stable ESDIRK solver (`solver` ∈ kvaerno3/4/5)
+    with a PID controller; `atol` multiplies a per-component scale (α′, 2hα′, ×p′).
+    Defaults from the work–precision study in `benchmarks/bench_spring.py`."""
+
+    rtol: float = eqx.field(static=True, default=1e-6)
+    atol: float = eqx.field(static=True, default=1e-6)
+    solver: str = eqx.field(static=True, default="kvaerno5")
+    max_steps: int = eqx.field(static=True, default=20_000)
+    root_finder: str = eqx.field(static=True, default="newton")
+
+    def __check_init__(self):
+        if self.solver not in _SOLVERS:
+            raise JaxrockInputError(f"solver = {self.solver!r}; valid: {tuple(_SOLVERS)}")
+        if not (0 < self.rtol < 1) or not (0 < self.atol < 1):
+            raise JaxrockInputError(f"rtol = {self.rtol:g}, atol = {self.atol:g}: both must be in (0, 1)")
+        if self.root_finder not in ("newton", "chord"):
+            raise JaxrockInputError(f"root_finder = {self.root_finder!r}; valid: ('newton', 'chord')")
+        if self.max_steps < 16:
+            raise JaxrockInputError(f"max_steps = {self.max_steps}: must be >= 16")
+
+    def diffrax_solver(self):
+        """The ESDIRK solver; its stage equations are solved by full Newton (Jacobian refreshed
+        every iteration: the tanh spring's stiffness jumps by ~α/θs across |θ| ≈ θs, where the
+        frozen-Jacobian chord iteration diverges and steps get rejected) or by diffrax's VeryChord."""
+        if self.root_finder == "newton":
+            rf = with_stepsize_controller_tols(optx.Newton)()
+        else:
+            rf = with_stepsize_controller_tols(diffrax.VeryChord)()
+        return _SOLVERS[self.solver](root_finder=rf)
+
+    def controller(self, mech: _Mechanics, excitation: AbstractExcitation, dtmax=None):
+        pid = diffrax.PIDController(
+            rtol=self.rtol,
+            atol=self.atol * mech.atol_scale(),
+            pcoeff=0.0,
+            icoeff=1.0,
+            dtmax=dtmax,
+        )
+        if excitation.step_ts is not None:
+            return diffrax.ClipStepSizeController(pid, step_ts=excitation.step_ts)
+        return pid
+
+    def solve(
+        self,
+        model: "SpringModel | _Mechanics",
+        excitation: AbstractExcitation,
+        y0,
+        t0,
+        t1,
+        event: diffrax.Event | None = None,
+        saveat: diffrax.SaveAt | None = None,
+        *,
+        dtmax=None,
+        throw: bool = False,
+    ) -> diffrax.Solution:
+        """One `diffrax.diffeqsolve` of the model's first-order equations from (t0, y0) to t1.
+
+        `model` may be a `SpringModel` (its mechanics are prepared here) or prepared mechanics
+        (`SpringModel.mechanics()`), reused across calls. `dtmax` defaults to the excitation's
+        `max_step` while t < t_end. Never throws by default (`throw=False`): inspect `result`.
+        """
+        mech = model.mechanics() if isinstance(model, SpringModel) else model
+        if saveat is None:
+            saveat = diffrax.SaveAt(t1=True)
+        if dtmax is None:
+            dtmax = excitation.max_step
+        term = diffrax.ODETerm(lambda t, y, args: args[0].vector_field(t, y, args[1]))
+        t0 = jnp.asarray(t0, dtype=float)
+        return diffrax.diffeqsolve(
+            term,
+            self.diffrax_solver(),
+            t0,
+            t1,
+            jnp.minimum(1e-3 / mech.p_r, 0.5 * dtmax) if dtmax is not None else 1e-3 / mech.p_r,
+            y0,
+            args=(mech, excitation),
+            saveat=saveat,
+            stepsize_controller=self.controller(mech, excitation, dtmax),
+            event=event,
+            max_steps=self.max_steps,
+            throw=throw,
+        )
+
+
+# ----------------------------------------------------------------------------------------------
+# peaks from the recorded steps
+# ----------------------------------------------------------------------------------------------
+def _hermite_peak(ts, th, om):
+    """max |θ| over all steps from (t, θ, θ̇) at the step ends, maximising the cubic Hermite
+    interpolant of each step in closed form. Unused (non-finite) entries are ignored."""
+    t0, t1 = ts[:-1], ts[1:]
+    valid = jnp.isfinite(t1) & jnp.isfinite(t0) & (t1 > t0)
+    safe = lambda x, fill: jnp.where(valid, x, fill)
+    t0s, t1s = safe(t0, 0.0), safe(t1, 1.0)
+    a0, a1 = safe(th[:-1], 0.0), safe(th[1:], 0.0)
+    w0, w1 = safe(om[:-1], 0.0), safe(om[1:], 0.0)
+    dt = t1s - t0s
+    # dθ/ds = A s² + B s + C, s ∈ [0, 1]
+    A = 6 * a0 + 3 * dt * w0 - 6 * a1 + 3 * dt * w1
+    B = -6 * a0 - 4 * dt * w0 + 6 * a1 - 2 * dt * w1
+    C = dt * w0
+    disc = B**2 - 4 * A * C
+    sq = jnp.sqrt(jnp.where(disc > 0, disc, 1.0))
+    qq = -0.5 * (B + jnp.where(B >= 0, 1.0, -1.0) * sq)
+    qok = (jnp.abs(qq) > 0) & (disc > 0)
+    qs = jnp.where(qok, qq, 1.0)
+    r1 = jnp.where(qok & (jnp.abs(A) > 0), qq / jnp.where(jnp.abs(A) > 0, A, 1.0), -1.0)
+    r2 = jnp.where(qok, C / qs, -1.0)
+    # degenerate quadratic (A = 0): single root −C/B
+    r3 = jnp.where((jnp.abs(A) == 0) & (jnp.abs(B) > 0), -C / jnp.where(jnp.abs(B) > 0, B, 1.0), -1.0)
+
+    def herm(s):
+        s2, s3 = s * s, s * s * s
+        return (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * dt * w0 + (-2 * s3 + 3 * s2) * a1 + (s3 - s2) * dt * w1
+
+    best = jnp.maximum(jnp.abs(a0), jnp.abs(a1))
+    for r in (r1, r2, r3):
+        inside = (r > 0) & (r < 1)
+        best = jnp.maximum(best, jnp.where(inside, jnp.abs(herm(jnp.where(inside, r, 0.5))), 0.0))
+    return jnp.max(jnp.where(valid, best, 0.0))
+
+
+def _first_exceedance(ts, th, level):
+    """First time |θ| exceeds `level` (linear between recorded steps); +inf if never."""
+    x = jnp.abs(th) - level
+    ok = jnp.isfinite(ts) & jnp.isfinite(x)
+    x = jnp.where(ok, x, -1.0)
+    above = x > 0
+    k = jnp.argmax(above)
+    km = jnp.maximum(k - 1, 0)
+    frac = jnp.clip(-x[km] / jnp.where(x[k] - x[km] > 0, x[k] - x[km], 1.0), 0.0, 1.0)
+    tk = jnp.where(k > 0, ts[km] + frac * (ts[k] - ts[km]), ts[k])
+    return jnp.where(jnp.any(above), tk, jnp.inf)
+
+
+def _status_of(result) -> Status:
+    ok = (result == diffrax.RESULTS.successful) | (result == diffrax.RESULTS.event_occurred)
+    steps = result == diffrax.RESULTS.max_steps_reached
+    return Status.where(ok, Status.ok, Status.where(steps, Status.max_steps, Status.solver_failed))
+
+
+def _worse(s1: Status, s2: Status) -> Status:
+    return Status.where(s1 == Status.ok, s2, s1)
+
+
+# ----------------------------------------------------------------------------------------------
+# the model
+# ----------------------------------------------------------------------------------------------
+class SpringModel(AbstractModel):
+    """The paper's spring model (SM), quasi-rigid (``column=None``) or flexible.
+
+    Fields (arrays are vmappable/differentiable leaves):
+    - `block`: geometry (`Block`, with `b_base > b` for an extended rigid base, section 5);
+    - `column`: `Column` (E, ρ, optional A, I) or None for the one-DOF quasi-rigid SM;
+    - `added_masses` (static): add ΔI = I′o − (4/3) m h² (SPEC; paper section 3.3);
+    - `cbar`: damper coefficient c̄ (default eq. 17 with α′);
+    - `smoothing`: θs/α′ of the tanh spring (default `DEFAULT_SMOOTHING`);
+    - `zeta`: column damping ratio in its first fixed-base mode (stiffness proportional);
+    - `n_elements` (static), `fixed_base` (static: base rotation clamped, section 6);
+    - `threshold`: overturned when |θ| ≥ threshold·α′.
+    """
+
+    block: Block
+    column: Column | None
+    cbar: Float[Array, ""]
+    smoothing: Float[Array, ""]
+    zeta: Float[Array, ""]
+    threshold: float
+    added_masses: bool = eqx.field(static=True)
+    n_elements: int = eqx.field(static=True)
+    fixed_base: bool = eqx.field(static=True)
+
+    def __init__(
+        self,
+        block: Block,
+        column: Column | None = None,
+        *,
+        added_masses: bool = True,
+        cbar=None,
+        smoothing=DEFAULT_SMOOTHING,
+        zeta=0.01,
+        n_elements: int = 10,
+        fixed_base: bool = False,
+        threshold=1.0,
+    ):
+        if not isinstance(block, Block):
+            raise JaxrockInputError(f"block must be a jaxrock.Block, got {type(block).__name__}")
+        if column is not None and not isinstance(column, Column):
+            raise JaxrockInputError(f"column must be a jaxrock Column or None, got {type(column).__name__}")
+        if not isinstance(n_elements, int) or isinstance(n_elements, bool) or n_elements < 1:
+            raise JaxrockInputError(f"n_elements = {n_elements!r}: must be an integer >= 1")
+        check_positive("smoothing (theta_s/alpha)", smoothing)
+        check_range("smoothing (theta_s/alpha)", smoothing, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_nonnegative("zeta (column damping ratio)", zeta)
+        check_range("threshold (overturning |theta|/alpha)", threshold, 0.0, 1.0, lo_open=True)
+        if cbar is not None:
+            check_nonnegative("cbar (damper coefficient)", cbar)
+        self.block = block
+        self.column = column
+        self.added_masses = bool(added_masses)
+        self.cbar = cbar_eq17(block.alpha_r) if cbar is None else jnp.asarray(cbar, dtype=float)
+        self.smoothing = jnp.asarray(smoothing, dtype=float)
+        self.zeta = jnp.asarray(zeta, dtype=float)
+        self.n_elements = n_elements
+        self.fixed_base = bool(fixed_base)
+        self.threshold = threshold
+
+    # -- AbstractModel --------------------------------------------------------------------------
+    def default_integrator(self) -> SpringIntegrator:
+        return SpringIntegrator()
+
+    @property
+    def history_fields(self) -> tuple[str, ...]:
+        return HISTORY_FIELDS
+
+    @property
+    def flexible(self) -> bool:
+        return self.column is not None
+
+    # -- mechanics ------------------------------------------------------------------------------
+    def mass(self):
+        """Column mass m [kg] (per unit out-of-plane thickness for the default section)."""
+        if self.column is None:
+            return QUASI_RIGID_RHO * 2 * self.block.b * 2 * self.block.h
+        A, _ = self.column.section(self.block)
+        return self.column.rho * A * 2 * self.block.h
+
+    def total_inertia(self):
+        """Itot about the base centre: (4/3) m h² (eq. 11), or I′o with added masses."""
+        m, blk = self.mass(), self.block
+        return m * blk.inertia_ratio if self.added_masses else (4.0 / 3.0) * m * blk.h**2
+
+    def mechanics(self, track_energy: bool = False) -> _Mechanics:
+        blk = self.block
+        m = self.mass()
+        My = m * G * blk.b_base  # = m g R′ sinα′
+        theta_s = self.smoothing * blk.alpha_r
+        c = self.cbar * m * math.sqrt(G) * blk.R_r**1.5  # eq. 18
+        Itot = self.total_inertia()
+        common = dict(
+            fixed_base=self.fixed_base,
+            track_energy=track_energy,
+            h=blk.h,
+            m=m,
+            My=My,
+            theta_s=theta_s,
+            c=c,
+            alpha_r=blk.alpha_r,
+            p_r=blk.p_r,
+            R_r=blk.R_r,
+            Itot=Itot,
+        )
+        if self.column is None:
+            return _Mechanics(n=None, EA=None, EI=None, a1=None, M=None, Minv=None, q_eq=None, V_eq=None, r=None, **common)
+        n = self.n_elements
+        A, I = self.column.section(blk)
+        EA, EI = self.column.E * A, self.column.E * I
+        nn = n + 1
+        if self.added_masses:
+            rot = jnp.full(nn, (Itot - (4.0 / 3.0) * m * blk.h**2) / nn)
+        else:  # section rotary inertia ρ I L_trib (keeps M regular; Rayleigh beam)
+            le = 2 * blk.h / n
+            rot = self.column.rho * I * le * jnp.concatenate([jnp.full(1, 0.5), jnp.ones(n - 1), jnp.full(1, 0.5)])
+        M = beam.mass_matrix(blk.h, n, m, rot)
+        Minv = jnp.linalg.inv(M)
+        Minv = 0.5 * (Minv + Minv.T)
+        T1 = beam.first_period(blk.h, n, m, EA, EI, rot)
+        a1 = self.zeta * T1 / jnp.pi  # stiffness-proportional: ζ = a₁ ω₁/2
+        mech = _Mechanics(n=n, EA=EA, EI=EI, a1=a1, M=M, Minv=Minv, q_eq=jnp.zeros(beam.n_dof(n)), V_eq=jnp.zeros(()), r=beam.influence_x(n), **common)
+        # gravity preload: static equilibrium at θ = 0 (axial shortening), by Newton on ∇V = 0
+        N = beam.n_dof(n)
+        grad_v = jax.grad(mech._column_potential)
+        hess_v = jax.hessian(mech._column_potential)
+        q = jnp.zeros(N)
+        free = jnp.ones(N).at[0].set(0.0)  # keep θ = 0
+        for _ in range(3):
+            g_ = grad_v(q) * free
+            H = hess_v(q) * free[:, None] * free[None, :] + jnp.diag(1.0 - free)
+            q = q - jnp.linalg.solve(H, g_)
+        V_eq = mech._column_potential(q)
+        return eqx.tree_at(lambda mm: (mm.q_eq, mm.V_eq), mech, (q, V_eq))
+
+    # -- public pieces for calibration / custom solves --------------------------------------------
+    def vector_field(self, t, y, excitation: AbstractExcitation):
+        """dy/dt of the first-order form y = [q, v] (q[0] = θ). Prepares the mechanics on each call;
+        inside loops prefer `self.mechanics().vector_field` or `SpringIntegrator.solve`."""
+        return self.mechanics().vector_field(t, y, excitation)
+
+    def initial_state(self, theta0=0.0, omega0=0.0):
+        """y at rest (gravity-preloaded column) rotated rigidly by θ0 with angular velocity ω0."""
+        return self.mechanics().initial_state(theta0, omega0)
+
+    def base_rotation(self, y):
+        return y[0]
+
+    def base_velocity(self, y):
+        N = 1 if self.column is None else beam.n_dof(self.n_elements)
+        return y[N]
+
+    def static_potential(self, theta):
+        """The one-DOF SM's own exact potential at zero velocity, My θs log cosh(θ/θs) − m g h (1 − cosθ)
+        [J] (→ SPEC's E(θ) = m g R (sinα|θ| − cosα(1 − cosθ)) as θs → 0). For the flexible model
+        this is the rigidly rotated column's value (its deformation adds only strain energy)."""
+        return self.mechanics().rigid_potential(theta)
+
+    def mechanical_energy(self, y):
+        return self.mechanics().mechanical_energy(y)
+
+    # -- run --------------------------------------------------------------------------------------
+    def run(self, excitation, integrator, save, t1) -> Solution:
+        if not isinstance(integrator, SpringIntegrator):
+            raise JaxrockInputError(f"SpringModel needs a SpringIntegrator, got {type(integrator).__name__}")
+        fields = () if save is None else save.fields
+        track = any(f in _ENERGY_FIELDS for f in fields)
+        mech = self.mechanics(track_energy=track)
+        alpha_r = self.block.alpha_r
+        thr = self.threshold * alpha_r
+        y0 = mech.initial_state()
+        t_start = excitation.t_start
+        t_end = excitation.t_end
+        N = mech.ndof
+        step_fn = lambda t, y, args: (y[0], y[N])
+        root = optx.Newton(rtol=1e-10, atol=1e-12 * alpha_r)
+        if self.fixed_base:
+            over_fn = lambda t, y, args, **kw: jnp.asarray(1.0)  # never overturns
+        else:
+            over_fn = lambda t, y, args, **kw: thr - jnp.abs(y[0])
+        theta_up = UPLIFT_FACTOR * mech.theta_s
+
+        if save is not None:
+            t_final = save.ts[-1] if t1 is None else t1
+            sub_hist = diffrax.SubSaveAt(ts=save.ts, fn=lambda t, y, args: mech.history(t, y, args[1], fields))
+            sub_steps = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
+            sol = integrator.solve(
+                mech, excitation, y0, t_start, t_final,
+                event=diffrax.Event(over_fn, root_finder=root),
+                saveat=diffrax.SaveAt(subs=[sub_hist, sub_steps]),
+            )
+            hist, (th, om) = sol.ys
+            ts_steps = sol.ts[1]
+            peak = _hermite_peak(ts_steps, th, om)
+            status = _status_of(sol.result)
+            t_last = jnp.max(jnp.where(jnp.isfinite(ts_steps), ts_steps, -jnp.inf))
+            return self._summary(peak, t_last, sol.result, ts_steps, th, theta_up, status, thr, sol.ts[0], hist)
+
+        # phase 1: the excitation window
+        sub = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
+        sol1 = integrator.solve(
+            mech, excitation, y0, t_start, t_end,
+            event=diffrax.Event(over_fn, root_finder=root),
+            saveat=diffrax.SaveAt(subs=[sub, diffrax.SubSaveAt(t1=True)]),
+        )
+        (th1, om1), y_end = sol1.ys
+        ts1 = sol1.ts[0]
+        y_end = y_end[-1]
+        peak1 = _hermite_peak(ts1, th1, om1)
+        st1 = _status_of(sol1.result)
+        over1 = (sol1.result == diffrax.RESULTS.event_occurred) & (st1 == Status.ok)
+        # phase 2: free motion until the answer is fixed
+        t_stop = t_end + 20 * 2 * jnp.pi / mech.p_r if t1 is None else jnp.maximum(t1, t_end)
+        margin = 1.0 if mech.n is None else 0.9
+        v_ref = margin * mech.rigid_potential(peak1)
+
+        def settled(t, y, args, **kw):
+            return args[0].mechanical_energy(y) < v_ref
+
+        y_end = jnp.where(jnp.all(jnp.isfinite(y_end)), y_end, y0)
+        t_start2 = sol1.ts[1][-1]
+        t_start2 = jnp.where(jnp.isfinite(t_start2), t_start2, t_end)
+        # an overturned (or failed) phase 1 still runs phase 2 formally, over a vanishing interval
+        done = over1 | (st1 != Status.ok)
+        t_stop = jnp.where(done, t_start2 + 1e-9, t_stop)
+        sol2 = integrator.solve(
+            mech, excitation, y_end, t_start2, t_stop,
+            event=diffrax.Event((over_fn, settled), root_finder=root),
+            saveat=diffrax.SaveAt(steps=True, fn=step_fn),
+            dtmax=jnp.inf,
+        )
+        th2, om2 = sol2.ys
+        ts2 = sol2.ts
+        # join: the last phase-1 point starts phase 2
+        ts2 = jnp.concatenate([jnp.atleast_1d(t_start2), ts2])
+        th2 = jnp.concatenate([jnp.atleast_1d(y_end[0]), th2])
+        om2 = jnp.concatenate([jnp.atleast_1d(y_end[N]), om2])
+        peak2 = jnp.where(done, 0.0, _hermite_peak(ts2, th2, om2))
+        status = _worse(st1, Status.where(done, Status.ok, _status_of(sol2.result)))
+        peak = jnp.maximum(peak1, peak2)
+        over2 = (~done) & (sol2.result == diffrax.RESULTS.event_occurred) & sol2.event_mask[0]
+        ts_all = jnp.concatenate([ts1, ts2])
+        th_all = jnp.concatenate([th1, th2])
+        t_last2 = jnp.max(jnp.where(jnp.isfinite(ts2), ts2, -jnp.inf))
+        t_over = jnp.where(over1, t_start2, jnp.where(over2, t_last2, jnp.inf))
+        return self._finish(peak, over1 | over2, t_over, ts_all, th_all, theta_up, status, thr, None, None)
+
+    def _summary(self, peak, t_last, result, ts, th, theta_up, status, thr, ts_hist, hist):
+        over = (result == diffrax.RESULTS.event_occurred) & (peak >= thr * (1 - 1e-6))
+        t_over = jnp.where(over, t_last, jnp.inf)
+        return self._finish(peak, over, t_over, ts, th, theta_up, status, thr, ts_hist, hist)
+
+    def _finish(self, peak, over, t_over, ts, th, theta_up, status, thr, ts_hist, hist):
+        alpha_r = self.block.alpha_r
+        max_theta = jnp.where(over, self.threshold, jnp.minimum(peak, thr) / alpha_r)
+        bad = ~jnp.isfinite(max_theta)
+        status = Status.where(bad & (status == Status.ok), Status.solver_failed, status)
+        max_theta = jnp.where(bad, jnp.nan, max_theta)
+        t_up = _first_exceedance(ts, th, theta_up)
+        return Solution(
+            max_theta=max_theta,
+            overturned=over,
+            t_overturn=t_over,
+            uplifted=jnp.isfinite(t_up),
+            t_uplift=t_up,
+            n_impacts=jnp.zeros((), int),
+            status=status,
+            ts=ts_hist,
+            history=hist,
+        )
+
+
+__all__ = [
+    "SpringModel",
+    "SpringIntegrator",
+    "Column",
+    "cbar_eq17",
+    "first_period_eq21",
+    "pushover_eq9",
+    "DEFAULT_SMOOTHING",
+]

@@ -1,0 +1,225 @@
+"""Record readers (PEER .AT2, two-column text, packaged El Centro) and the sampled `Record`."""
+
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrock import G, JaxrockInputError
+from jaxrock.records import el_centro, read_at2, read_record, read_two_column
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
+needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason=f"shared data folder {SHARED} is absent")
+PACKAGE_DATA = Path(__file__).resolve().parents[1] / "jaxrock" / "data"
+
+# file -> (NPTS, DT [s], PGA [g] from /work/shared/data/README.md or None where it gives none)
+SHARED_FILES = {
+    "IELC180.AT2": (4000, 0.01, 0.3129),
+    "elcentro_ns_1940.txt": (4000, 0.01, 0.3129),
+    "records/elCentro_peknold.AT2": (1559, 0.02, 0.3188),
+    "records/ARL360.at2": (2000, 0.02, None),
+    "records/B-ELC000.AT2": (8000, 0.005, None),
+    "records/A-TIN000.AT2": (7996, 0.005, None),
+}
+
+
+def _raw_lines(path: Path) -> list[str]:
+    """Lines split on '\\n' only (ARL360.at2 ends its lines with '\\r\\r\\n')."""
+    return path.read_bytes().decode().split("\n")
+
+
+def _naive_at2_values(path: Path) -> np.ndarray:
+    """Independent oracle: every whitespace token after the 4 header lines, in g."""
+    return np.array(" ".join(_raw_lines(path)[4:]).split(), dtype=float)
+
+
+# --- real files ---------------------------------------------------------------------------------
+
+
+@needs_shared
+@pytest.mark.parametrize("rel", sorted(SHARED_FILES))
+def test_shared_files_parse(rel):
+    npts, dt, pga = SHARED_FILES[rel]
+    path = SHARED / rel
+    rec = read_record(path)
+    assert rec.n == npts
+    assert float(rec.dt) == pytest.approx(dt, rel=1e-12)
+    acc_g = np.asarray(rec.acc) / G
+    if pga is not None:
+        assert np.max(np.abs(acc_g)) == pytest.approx(pga, abs=5e-5)
+    if path.suffix.lower() == ".at2":
+        np.testing.assert_array_equal(acc_g * G, _naive_at2_values(path) * G)
+        assert rec.name == _raw_lines(path)[1].strip()
+
+
+@needs_shared
+def test_shared_el_centro_formats_agree():
+    at2 = read_at2(SHARED / "IELC180.AT2")
+    txt = read_two_column(SHARED / "elcentro_ns_1940.txt")
+    np.testing.assert_array_equal(at2.acc, txt.acc)
+    np.testing.assert_array_equal(el_centro().acc, at2.acc)
+
+
+def test_packaged_el_centro():
+    rec = el_centro()
+    at2 = read_at2(PACKAGE_DATA / "IELC180.AT2")
+    txt = read_two_column(PACKAGE_DATA / "elcentro_ns_1940.txt")
+    np.testing.assert_array_equal(rec.acc, at2.acc)
+    np.testing.assert_array_equal(rec.acc, txt.acc)
+    assert rec.n == 4000 and float(rec.dt) == pytest.approx(0.01, rel=1e-12)
+    assert float(at2.dt) == 0.01
+    k = int(np.argmax(np.abs(np.asarray(rec.acc))))
+    assert float(rec.acc[k]) / G == pytest.approx(-0.3129, abs=5e-5)
+    assert k * 0.01 == pytest.approx(2.15)
+    assert at2.name.startswith("IMPERIAL VALLEY 5/19/40")
+
+
+# --- Record behaviour on a real record ----------------------------------------------------------
+
+
+def _records():
+    recs = [el_centro()]
+    if SHARED.is_dir():
+        recs += [read_record(SHARED / rel) for rel in sorted(SHARED_FILES) if rel.startswith("records/")]
+    return recs
+
+
+def test_record_interpolates_exactly_at_samples():
+    for rec in _records():
+        acc = np.asarray(rec.acc)
+        vals = np.asarray(jax.vmap(rec)(rec.times))
+        # exact up to the rounding of t/dt (|Δ| ≲ n ε max|a|)
+        np.testing.assert_allclose(vals, acc, rtol=1e-12, atol=1e-12 * np.max(np.abs(acc)), err_msg=rec.name)
+        assert float(rec(rec.t_end)) == pytest.approx(acc[-1], rel=1e-12, abs=1e-18), rec.name
+        assert float(rec(-1e-9)) == 0.0 and float(rec(rec.t_end + 1e-9)) == 0.0
+
+
+def test_record_scaled_values():
+    rec = el_centro()
+    t = jnp.asarray(2.155)
+    assert float(rec.scaled(2.5)(t)) == pytest.approx(2.5 * float(rec(t)), rel=1e-14)
+    mid = 0.5 * (rec.acc[215] + rec.acc[216])
+    assert float(rec(t)) == pytest.approx(float(mid), rel=1e-9)
+
+
+def _first_dense_exceedance(rec, t0, level, per_step=40):
+    """Brute force: dense numpy scan of the piecewise-linear record from t0; first time |üg| ≥ level."""
+    ts = np.asarray(rec.times)
+    acc = np.asarray(rec.scale * rec.acc)
+    dense = np.linspace(t0, ts[-1], int((ts[-1] - t0) / float(rec.dt)) * per_step + 1)
+    above = np.abs(np.interp(dense, ts, acc)) >= level
+    return (dense[np.argmax(above)] if above.any() else np.inf), dense[1] - dense[0]
+
+
+def test_next_exceedance_matches_dense_scan():
+    rec = el_centro().scaled(1.3)
+    pga = float(jnp.max(jnp.abs(rec.scale * rec.acc)))
+    starts = np.array([0.0, 0.004, 1.0, 2.0, 2.153, 5.0, 12.345, 30.0])
+    fractions = np.array([0.05, 0.3, 0.6, 0.9, 0.999])
+    t0, frac = (a.ravel() for a in np.meshgrid(starts, fractions))
+    levels = frac * pga
+    taus = np.asarray(jax.vmap(rec.next_exceedance)(jnp.asarray(t0), jnp.asarray(levels)))
+    for t, level, tau in zip(t0, levels, taus):
+        brute, h = _first_dense_exceedance(rec, t, level)
+        if not np.isfinite(brute):
+            assert np.isinf(tau), (t, level)
+            continue
+        assert tau >= t
+        assert brute - h - 1e-12 <= tau <= brute + 1e-12, (t, level, tau, brute)
+        if tau > t:  # a crossing, not "already above": |üg(τ)| is the level itself
+            assert abs(float(rec(tau))) == pytest.approx(level, rel=1e-9), (t, level)
+        else:
+            assert abs(float(rec(t))) >= level
+    assert np.isinf(float(rec.next_exceedance(0.0, 1.01 * pga)))
+    assert np.isinf(float(rec.next_exceedance(float(rec.t_end) + 0.1, 0.01 * pga)))
+
+
+# --- well-formed variants -----------------------------------------------------------------------
+
+AT2_HEAD = "PEER STRONG MOTION DATABASE RECORD.\nTEST EVENT 1/1/00, STATION, 000\nACCELERATION IN UNITS OF G\n"
+
+
+def _write(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_text(text, newline="")
+    return path
+
+
+def test_at2_header_variants(tmp_path):
+    body = "  .1E-01 -.2E-01  0.03\r\n-0.04\r\n   0.05   0.06\r\n"
+    for line4 in ("NPTS=  6, DT= .01000 SEC", "NPTS= 6 DT= 0.01", "npts=6,dt=1.0E-02"):
+        path = _write(tmp_path, "v.at2", AT2_HEAD + line4 + "\r\n" + body)
+        rec = read_record(path)
+        np.testing.assert_allclose(rec.acc, G * np.array([0.01, -0.02, 0.03, -0.04, 0.05, 0.06]), rtol=1e-15)
+        assert float(rec.dt) == 0.01 and rec.name == "TEST EVENT 1/1/00, STATION, 000"
+    assert read_at2(path, name="mine").name == "mine"
+
+
+def test_two_column_variants(tmp_path):
+    text = "# header\n\n5.00, 0.1\n5.02,-0.2  # trailing comment\n5.04 , 0.3\n"
+    rec = read_record(_write(tmp_path, "r.csv", text))
+    np.testing.assert_allclose(rec.acc, G * np.array([0.1, -0.2, 0.3]), rtol=1e-15)
+    assert float(rec.dt) == pytest.approx(0.02, rel=1e-12) and float(rec.t_start) == 0.0
+    assert rec.name == "r"
+    rec = read_two_column(_write(tmp_path, "r.txt", "0 1.5\n0.1 -2\n"), units="m/s2", name="x")
+    np.testing.assert_array_equal(rec.acc, [1.5, -2.0])
+    assert rec.name == "x"
+
+
+# --- malformed input ----------------------------------------------------------------------------
+
+BAD_AT2 = {
+    "no_npts": (AT2_HEAD + "DT= .01 SEC\n0.1 0.2\n", r"line 4: no numeric NPTS="),
+    "no_dt": (AT2_HEAD + "NPTS= 2, SEC\n0.1 0.2\n", r"line 4: no numeric DT="),
+    "dt_zero": (AT2_HEAD + "NPTS= 2, DT= 0.0\n0.1 0.2\n", r"line 4: DT = 0 s; the time step must be > 0"),
+    "dt_negative": (AT2_HEAD + "NPTS= 2, DT= -.01\n0.1 0.2\n", r"DT = -0.01 s; the time step must be > 0"),
+    "npts_one": (AT2_HEAD + "NPTS= 1, DT= .01\n0.1\n", r"NPTS = 1; a record needs NPTS >= 2"),
+    "nan": (AT2_HEAD + "NPTS= 3, DT= .01\n0.1 0.2\nNaN\n", r"line 6: non-finite value 'NaN'"),
+    "inf": (AT2_HEAD + "NPTS= 3, DT= .01\n0.1 -inf 0.2\n", r"line 5: non-finite value '-inf'"),
+    "token": (AT2_HEAD + "NPTS= 3, DT= .01\n0.1 0.2\n0.3x\n", r"line 6: non-numeric token '0.3x'"),
+    "fewer": (AT2_HEAD + "NPTS= 4, DT= .01\n0.1 0.2\n0.3\n", r"3 values after the header, fewer than NPTS = 4"),
+    "more": (AT2_HEAD + "NPTS= 2, DT= .01\n0.1 0.2\n0.3\n", r"3 values after the header, more than NPTS = 2"),
+    "short_header": ("PEER\nEVENT\n", r"only 3 line\(s\); an .AT2 file needs 4 header lines"),
+    "empty": ("", r"the file is empty"),
+    "blank": ("\n  \n", r"the file is empty"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_AT2))
+def test_bad_at2(tmp_path, case):
+    text, message = BAD_AT2[case]
+    path = _write(tmp_path, f"{case}.AT2", text)
+    with pytest.raises(JaxrockInputError, match=message) as err:
+        read_record(path)
+    assert str(path) in str(err.value)
+
+
+BAD_TWO_COLUMN = {
+    "nonuniform": ("0 0.1\n0.01 0.2\n0.02 0.3\n0.035 0.4\n", r"line 4: time step 0.015 s differs .* must be uniform"),
+    "decreasing": ("0 0.1\n0.01 0.2\n0.005 0.3\n", r"line 3: time 0.005 s does not exceed .* strictly increasing"),
+    "repeated": ("# c\n0 0.1\n0 0.2\n", r"line 3: time 0 s does not exceed .* strictly increasing"),
+    "nan": ("0 0.1\n0.01 nan\n", r"line 2: non-finite value 'nan'"),
+    "inf": ("0 0.1\n0.01 0.2\ninf 0.3\n", r"line 3: non-finite value 'inf'"),
+    "token": ("0 0.1\n0.01 zero\n", r"line 2: non-numeric token 'zero'"),
+    "three_columns": ("0 0.1\n0.01 0.2 7\n", r"line 2: 3 value\(s\); expected two columns"),
+    "one_row": ("# only one\n0 0.1\n", r"1 data line\(s\); a record needs at least 2"),
+    "only_comments": ("# nothing\n# here\n", r"0 data line\(s\)"),
+    "empty": ("", r"the file is empty"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_TWO_COLUMN))
+def test_bad_two_column(tmp_path, case):
+    text, message = BAD_TWO_COLUMN[case]
+    path = _write(tmp_path, f"{case}.txt", text)
+    with pytest.raises(JaxrockInputError, match=message) as err:
+        read_record(path)
+    assert str(path) in str(err.value)
+
+
+def test_unknown_units(tmp_path):
+    path = _write(tmp_path, "u.txt", "0 0.1\n0.01 0.2\n")
+    with pytest.raises(JaxrockInputError, match=r"units = 'cm/s2' .*valid units are \['g', 'm/s2'\]"):
+        read_two_column(path, units="cm/s2")
