@@ -44,3 +44,7 @@ __all__ += [
 from .records import el_centro, read_at2, read_record, read_two_column
 
 __all__ += ["el_centro", "read_at2", "read_record", "read_two_column"]
+
+from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, run_batch
+
+__all__ += ["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "run_batch"]

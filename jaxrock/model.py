@@ -78,4 +78,11 @@ def simulate(
         check_range("t1 (end time) [s]", t1, float(excitation.t_start), float("inf"), lo_open=True, hi_open=True)
     if integrator is None:
         integrator = model.default_integrator()
+    return _run(model, excitation, integrator, save, t1)
+
+
+@eqx.filter_jit
+def _run(model, excitation, integrator, save, t1):
+    # Compiled once per structure (model kind, mesh, save request): repeated calls with new
+    # numbers reuse it. Composes with an outer jit, vmap and grad.
     return model.run(excitation, integrator, save, t1)

@@ -15,8 +15,10 @@ The motion is a sequence of segments, run by a bounded loop (static bound, repor
 Zeno sequences: after an impact with |üg| < g tanα′, the remaining flights form a geometric
 series (velocity ×η per impact, frozen üg, small angles) whose total duration is
 `T_Z = 2v/(1−η²) (1/A_s + η/A_−s)`, `A_s = p² cosα (tanα + s üg/g)`. When `T_Z ≤ zeno_time/p`,
-the block is put to rest (its rest is memoryless: the next uplift only depends on the excitation,
-searched from the impact time), instead of computing the remaining infinitely many impacts.
+or when the post-impact velocity is below `zeno_velocity·p·α` (a floor for slender blocks, η → 1,
+whose flights near the uplift threshold are long even at round-off velocities), the block is put
+to rest (its rest is memoryless: the next uplift only depends on the excitation, searched from the
+impact time), instead of computing the remaining infinitely many impacts.
 
 Stopping when the answer is fixed (no history asked): after the excitation has ended the motion is
 free; energy `E = ½θ̇² + p²(cos(α−|θ|) − cosα)` is conserved between impacts and multiplied by η²
@@ -54,7 +56,8 @@ class EventIntegrator(AbstractIntegrator):
       tolerances; see benchmarks/bench_rigid.py for the work–precision data).
     - `rtol`, `atol`: step-size control tolerances (on θ [rad] and θ̇ [rad/s]).
     - `root_tol`: tolerance of the Newton root finds that locate the events [s].
-    - `zeno_time`: Zeno closure threshold, in units of 1/p′ (see module docstring).
+    - `zeno_time`, `zeno_velocity`: Zeno closure thresholds, in units of 1/p′ and p′α′ (see
+      module docstring).
     - `chunk_steps`: length of one loop iteration, in nominal steps. Under `vmap` all lanes move
       in lock-step, one loop iteration at a time; cutting segments into time windows of about this
       many steps keeps a lane that chatters through many short segments from making every other
@@ -71,9 +74,10 @@ class EventIntegrator(AbstractIntegrator):
     atol: float = 1e-12
     root_tol: float = 1e-13
     zeno_time: float = 1e-4
+    zeno_velocity: float = 1e-9
     chunk_steps: int = 16
     max_steps: int = eqx.field(static=True, default=4096)
-    max_iterations: int = eqx.field(static=True, default=20_000)
+    max_iterations: int = eqx.field(static=True, default=100_000)
 
 
 class RigidModel(AbstractModel):
@@ -190,6 +194,7 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
     t_stop = t_end if summary_only else jnp.asarray(t1, dtype=float)
     h_nom = jnp.minimum(exc.max_step, 0.05 / p)
     dtype = jnp.result_type(float)
+    eps, tiny = jnp.finfo(dtype).eps, jnp.finfo(dtype).tiny
 
     def vf(t, y, args):
         theta, omega = y
@@ -248,11 +253,13 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         t_seg = jnp.where(is_rocking, segment_end(c), c.t)
         acc0 = model.acceleration(c.t, c.theta, c.side, exc)
         at_zero = c.theta == 0
-        dt_flight = 0.05 * jnp.abs(c.omega) / jnp.maximum(jnp.abs(acc0), 1e-300)
-        dt0 = jnp.where(at_zero, jnp.clip(dt_flight, 1e-8 / p, h_nom), h_nom)
+        # smallest first step: 1e-8/p, but resolvable at the current time in this precision
+        dt_min = jnp.maximum(1e-8 / p, 64 * eps * (jnp.abs(c.t) + 1 / p))
+        dt_flight = 0.05 * jnp.abs(c.omega) / jnp.maximum(jnp.abs(acc0), tiny)
+        dt0 = jnp.where(at_zero, jnp.clip(dt_flight, dt_min, h_nom), h_nom)
         dt0 = jnp.where(c.dt_next > 0, c.dt_next, dt0)
         t_win = jnp.minimum(t_seg, c.t + integ.chunk_steps * h_nom)
-        dt0 = jnp.minimum(dt0, jnp.maximum(t_win - c.t, 1e-300))
+        dt0 = jnp.minimum(dt0, jnp.maximum(t_win - c.t, tiny))
         saveat = diffrax.SaveAt(t1=True, dense=not summary_only)
         sol = diffrax.diffeqsolve(
             term,
@@ -274,7 +281,7 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         hit_impact, hit_apex, hit_over = (hit_impact & is_rocking, hit_apex & is_rocking, hit_over & is_rocking)
         chunked = is_rocking & ~(hit_impact | hit_apex | hit_over) & (tf < t_seg)
         n_acc = jnp.maximum(sol.stats["num_accepted_steps"], 1)
-        dt_next = jnp.where(chunked, jnp.maximum((tf - c.t) / n_acc, 1e-8 / p), 0.0)
+        dt_next = jnp.where(chunked, jnp.maximum((tf - c.t) / n_acc, dt_min), 0.0)
         status = _event_status(sol.result)
         missed = is_rocking & ~hit_impact & (c.side * thf < -1e-6 * alpha)
         status = Status.where(missed, Status.missed_impact, status)
@@ -299,8 +306,8 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         a_o = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) - s_ug)
         v = jnp.abs(omega_imp)
         both = (a_s > 0) & (a_o > 0)
-        t_zeno = 2 * v / (1 - eta**2 + 1e-300) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
-        zeno = hit_impact & both & (t_zeno * p <= integ.zeno_time)
+        t_zeno = 2 * v / (1 - eta**2 + tiny) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
+        zeno = hit_impact & both & ((t_zeno * p <= integ.zeno_time) | (v <= integ.zeno_velocity * p * alpha))
 
         peak = jnp.where(hit_apex | (not summary_only), jnp.maximum(c.peak, jnp.abs(thf) / alpha), c.peak)
         peak = jnp.where(hit_over, thr, peak)

@@ -265,3 +265,77 @@ def overturning_spectrum(
         status=out["status"].reshape(shape),
         attrs=attrs,
     )
+
+
+# -- record spectra (paper figure 10) ---------------------------------------------------------------
+class RecordSpectrum(eqx.Module):
+    """Least scale factor of a record that overturns a body, per body height (paper figure 10).
+
+    `scale[i]` is the least factor of the sweep (refined by bisection to `tolerance`) that
+    overturns the body of height `height[i]`; +inf where no factor of the sweep overturns it.
+    """
+
+    height: np.ndarray
+    scale: np.ndarray
+    bracket_low: np.ndarray
+    attrs: dict
+
+    def save(self, path) -> Path:
+        import xarray as xr
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        xr.Dataset(
+            {
+                "scale": (("height",), self.scale, {"long_name": "least overturning scale factor"}),
+                "bracket_low": (("height",), self.bracket_low, {"long_name": "largest scale below it that does not overturn"}),
+            },
+            coords={"height": ("height", self.height, {"long_name": "2h", "units": "m"})},
+            attrs={k: str(v) for k, v in self.attrs.items()},
+        ).to_netcdf(path, engine="scipy")
+        return path
+
+
+def record_overturning_scale(
+    model: AbstractModel,
+    record: Record,
+    heights,
+    scales,
+    *,
+    refine: int = 12,
+    integrator: AbstractIntegrator | None = None,
+    progress: bool = True,
+) -> RecordSpectrum:
+    """Least factor of `record` that overturns `model`'s body, for each height in `heights`.
+
+    The body keeps the template's slenderness (and base slenderness); only its size changes.
+    The factor sweep `scales` is run vmapped for each height; the first overturning factor is then
+    refined by `refine` bisections against the largest smaller factor that does not overturn.
+    """
+    hs = check_grid("heights (2h) [m]", heights)
+    sc = check_grid("scales (record factors)", scales)
+    if not isinstance(record, Record):
+        raise JaxrockInputError(f"record must be a jaxrock.Record, got {type(record).__name__}")
+    block = model.block
+    tan_a, tan_b = block.tan_alpha, block.b_base / block.h
+    least = np.full(hs.size, np.inf)
+    low = np.full(hs.size, np.nan)
+    for i, h in enumerate(tqdm(hs, desc="record spectrum", unit="height", disable=not progress)):
+        new_block = type(block).from_slenderness(h, tan_a, tan_b, exact_inertia=block.exact_inertia)
+        m = eqx.tree_at(lambda x: x.block, model, new_block)
+        recs = jax.vmap(record.scaled)(jnp.asarray(sc))
+        over = np.asarray(run_batch(m, recs, integrator).overturned)
+        if not over.any():
+            continue
+        k = int(np.argmax(over))
+        lo, hi = (0.0 if k == 0 else sc[k - 1]), sc[k]
+        for _ in range(refine):
+            mid = 0.5 * (lo + hi)
+            sol = run_batch(m, jax.vmap(record.scaled)(jnp.asarray([mid])), integrator)
+            if bool(np.asarray(sol.overturned)[0]):
+                hi = mid
+            else:
+                lo = mid
+        least[i], low[i] = hi, lo
+    attrs = {"model": type(model).__name__, "record": record.name, "tan_alpha": float(tan_a), "tan_alpha_base": float(tan_b)}
+    return RecordSpectrum(height=hs, scale=least, bracket_low=low, attrs=attrs)

@@ -88,18 +88,18 @@ def test_energy_ratio_depends_little_on_alpha(grid):
 
 def test_gradient_matches_finite_differences():
     """d r_eq²/d c̄ and d r_eq²/d tanα by reverse mode through the solver, event and root find,
-    against central differences (the solver tolerance 1e-9 makes them good to ~1e-6)."""
+    against central differences (measured agreement: 3e-5 relative for c̄, 2e-4 for tanα)."""
     fam = SpringFamily()
     f = jax.jit(lambda ta, c: energy_ratio(fam(ta, c), 0.7))
     g = jax.jit(jax.grad(lambda ta, c: energy_ratio(fam(ta, c), 0.7), argnums=(0, 1)))
     ta, c = 0.2, 0.08
     dta, dc = g(ta, c)
-    hc, ht = 1e-4, 1e-4
+    hc, ht = 1e-4, 3e-3  # r_eq² changes little with tanα: a smaller ht drowns in step-sequence noise (~1e-8)
     fd_c = (f(ta, c + hc) - f(ta, c - hc)) / (2 * hc)
     fd_t = (f(ta + ht, c) - f(ta - ht, c)) / (2 * ht)
     assert float(dc) == pytest.approx(float(fd_c), rel=1e-4)
     assert float(dc) < 0
-    assert float(dta) == pytest.approx(float(fd_t), rel=1e-3, abs=1e-5)
+    assert float(dta) == pytest.approx(float(fd_t), rel=2e-3)
 
 
 def test_single_angle_calibration_reproduces_target():

@@ -76,7 +76,8 @@ def run_hist():
 
 @pytest.fixture(scope="module")
 def run_batch():
-    return jax.jit(jax.vmap(lambda m, e: jr.simulate(m, e, integrator=DEFAULT)))
+    # the same function as run1, vmapped (the integrator is an argument in both)
+    return jax.jit(jax.vmap(lambda m, e, i: jr.simulate(m, e, integrator=i), in_axes=(0, 0, None)))
 
 
 def history(run_hist, m, exc, ts, integ=DEFAULT):
@@ -282,18 +283,21 @@ def test_damped_block_comes_to_rest_and_a_second_pulse_uplifts_it_again(run_hist
     m = model(2.0, 0.3)  # η = 0.876
     alpha, p = float(m.block.alpha_r), float(m.block.p_r)
     lvl = G * 0.3
-    wp, dt, t1, t2 = 3 * p, 0.002, 2.0, 12.0
-    acc = _two_pulses(t1, 2.0 * lvl, t2, 3.0 * lvl, wp, dt, 20.0)
+    wp, dt, t1, t2 = 5 * p, 0.002, 2.0, 12.0
+    acc = _two_pulses(t1, 1.5 * lvl, t2, 2.5 * lvl, wp, dt, 20.0)
     exc = jr.Record(acc, dt)
     ts = np.linspace(0.0, 20.0, N_HIST)
     sol, th, om = history(run_hist, m, exc, ts)
     assert not bool(sol.overturned)
     assert 10 < int(sol.n_impacts) < 2000
     # after the first pulse, the block is exactly at rest before the second pulse uplifts it
-    t_up2 = t2 - brentq(lambda x: (1 - x * x / 2) * math.exp(-x * x / 4) - 1 / 3.0, 0.0, 1.4) / wp
+    # (the first lobe of the second pulse, −0.446 × 2.5 g tanα, already uplifts it)
+    t_up2 = sr.next_exceedance(sr.record(acc, dt)[0], t1 + 3.0, 20.0, lvl, dt)
+    assert t2 - 2 / wp < t_up2 < t2
     quiet = (ts > t1 + 4.0) & (ts < t_up2 - 0.05)
     assert np.any(th[ts < t1 + 3.0] != 0)
     assert np.all(th[quiet] == 0) and np.all(om[quiet] == 0)
+    assert abs(float(sol.t_uplift) - ts[np.flatnonzero(th)[0] - 1]) < ts[1]  # first uplift, pulse 1
     moving2 = (ts > t_up2) & (ts < t2 + 2.0)
     assert np.max(np.abs(th[moving2])) > 0.05 * alpha
     # summary run: same peak as the SciPy reference (which also closes Zeno sequences)
@@ -394,7 +398,7 @@ def batch_results(run_batch):
     for pulse in ("sym", "anti"):
         idx = [i for i, sc in enumerate(SCENES) if sc["pulse"] == pulse]
         ms, es = zip(*[_scene_inputs(SCENES[i])[:2] for i in idx])
-        sol = jax.device_get(run_batch(stack(ms), stack(es)))
+        sol = jax.device_get(run_batch(stack(ms), stack(es), DEFAULT))
         for k, i in enumerate(idx):
             out[i] = jax.tree_util.tree_map(lambda x: x[k], sol)
     return out
@@ -414,14 +418,34 @@ def test_agrees_with_scipy_reference_on_pulse_scenes(batch_results):
     assert 0 < n_over < len(SCENES)  # both regimes are covered
 
 
-def test_vmap_equals_loop_bitwise(batch_results, run1):
-    for i in range(0, len(SCENES), 23):
-        m, e, _, _ = _scene_inputs(SCENES[i])
-        s = run1(m, e, DEFAULT)
+@pytest.fixture(scope="module")
+def loop_results(run1):
+    """The same scenes one at a time (every 7th scene), with the same compiled function unbatched."""
+    return {i: jax.device_get(run1(*_scene_inputs(SCENES[i])[:2], DEFAULT)) for i in range(0, len(SCENES), 7)}
+
+
+def test_vmap_equals_loop_to_solver_tolerance(batch_results, loop_results):
+    for i, s in loop_results.items():
         b = batch_results[i]
-        for name in ("max_theta", "overturned", "t_overturn", "t_uplift", "n_impacts", "n_iterations"):
-            assert np.array_equal(np.asarray(getattr(s, name)), np.asarray(getattr(b, name))), (SCENES[i], name)
-        assert int(s.status._value) == int(b.status._value)
+        assert int(s.status._value) == int(b.status._value) == 0
+        assert bool(s.overturned) == bool(b.overturned) and bool(s.uplifted) == bool(b.uplifted)
+        assert abs(float(s.max_theta) - float(b.max_theta)) < 1e-8, SCENES[i]
+        if bool(s.overturned):
+            assert abs(float(s.t_overturn) - float(b.t_overturn)) < 1e-8, SCENES[i]
+
+
+def test_vmap_equals_loop_bitwise(batch_results, loop_results):
+    """A batched run must give the bits of the same scene run alone (this machine, same compiled
+    function). Fails as of writing: differences up to ~4e-10 in max_theta (see the report)."""
+    diffs = []
+    for i, s in loop_results.items():
+        b = batch_results[i]
+        for name in ("max_theta", "t_overturn", "t_uplift", "n_impacts", "overturned"):
+            x, y = np.asarray(getattr(s, name)), np.asarray(getattr(b, name))
+            if not np.array_equal(x, y):
+                diffs.append((name, SCENES[i], float(x), float(y)))
+    worst = max((abs(d[2] - d[3]) for d in diffs if d[0] == "max_theta"), default=0.0)
+    assert not diffs, f"{len(diffs)} differences in {len(loop_results)} scenes (max |Δ max_theta| = {worst:.3g}); first: {diffs[:3]}"
 
 
 # El Centro (4000 samples, 0.01 s): (2h, tanα, scale). The (10, 0.15, 1.0) scene fails in jaxrock
@@ -443,35 +467,32 @@ def test_agrees_with_scipy_reference_on_el_centro(run1, height, tan_a, scale):
 # --- gradients --------------------------------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def peak_fn():
-    def peak(a_p, eta, w_p, integ):
-        m = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2), eta=eta)
-        return jr.simulate(m, jr.RickerPulse(a_p, w_p), integrator=integ).max_theta
-
-    return peak
+def peak_tight(a_p, eta, w_p):
+    # the integrator is closed over: under jax.jit its tolerances are constants, not tracers
+    m = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2), eta=eta)
+    return jr.simulate(m, jr.RickerPulse(a_p, w_p), integrator=TIGHT).max_theta
 
 
 @pytest.mark.slow
-def test_gradients_match_central_differences(peak_fn, run1):
+def test_gradients_match_central_differences():
     """d(max|θ|/α)/d a_p and /d η where the peak is a smooth function (rocking after one impact,
     no overturning). Central differences on runs at rtol 1e-12 with step 1e-5 (relative):
     truncation ~1e-10, noise ~1e-12/1e-5 = 1e-7 relative; the tolerance 1e-5 covers both and the
     O(rtol) difference between the discrete and the exact derivative."""
-    grad = jax.jit(jax.grad(peak_fn, argnums=(0, 1)))
-    value = jax.jit(peak_fn)
+    grad = jax.jit(jax.grad(peak_tight, argnums=(0, 1)))
+    value = jax.jit(peak_tight)
     blk = jr.Block.from_slenderness(10.0, 0.2)
     p, eta0 = float(blk.p), float(blk.eta)
     for accel, ratio in [(2.0, 5.0), (4.0, 5.0), (1.5, 3.0)]:
         a_p, w_p = accel * G * 0.2, ratio * p
-        v = float(value(a_p, eta0, w_p, TIGHT))
+        v = float(value(a_p, eta0, w_p))
         assert 0.05 < v < 0.9
-        ga, ge = (float(g) for g in grad(a_p, eta0, w_p, TIGHT))
+        ga, ge = (float(g) for g in grad(a_p, eta0, w_p))
         assert np.isfinite(ga) and np.isfinite(ge)
         h = 1e-5 * a_p
-        fd_a = (float(value(a_p + h, eta0, w_p, TIGHT)) - float(value(a_p - h, eta0, w_p, TIGHT))) / (2 * h)
+        fd_a = (float(value(a_p + h, eta0, w_p)) - float(value(a_p - h, eta0, w_p))) / (2 * h)
         h = 1e-5
-        fd_e = (float(value(a_p, eta0 + h, w_p, TIGHT)) - float(value(a_p, eta0 - h, w_p, TIGHT))) / (2 * h)
+        fd_e = (float(value(a_p, eta0 + h, w_p)) - float(value(a_p, eta0 - h, w_p))) / (2 * h)
         assert abs(ga - fd_a) <= 1e-5 * abs(fd_a), (accel, ratio, ga, fd_a)
         assert abs(ge - fd_e) <= 1e-5 * abs(fd_e) + 1e-9, (accel, ratio, ge, fd_e)
         assert abs(fd_e) > 1e-3  # the peak comes after an impact: η matters

@@ -1,0 +1,446 @@
+"""The `jaxrock` command line (typer): spectra, single scenes, CSV batches, record spectra and the
+damper calibration. `jaxrock COMMAND --help` describes each command.
+
+Bad input ends with a one-line `Error: ...` message (the `JaxrockInputError` text, naming the
+parameter and its valid range) and exit code 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from enum import Enum
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import typer
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    help="Rocking bodies under earthquakes (Vassiliou, Mackie & Stojadinovic 2014), in JAX (float64).",
+)
+
+EXIT_INPUT = 2
+
+
+class ModelKind(str, Enum):
+    rigid = "rigid"
+    spring = "spring"
+    spring_flexible = "spring-flexible"
+
+
+class PulseKind(str, Enum):
+    symmetric = "symmetric"
+    antisymmetric = "antisymmetric"
+
+
+def _fail(msg: str):
+    typer.echo(f"Error: {msg}", err=True)
+    raise typer.Exit(EXIT_INPUT)
+
+
+def _handles_input_errors(fn):
+    """Turn a `JaxrockInputError` into a one-line message and exit code 2."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        from ._validate import JaxrockInputError
+
+        try:
+            return fn(*args, **kwargs)
+        except JaxrockInputError as e:
+            _fail(str(e))
+
+    return wrapper
+
+
+def _check_count(name: str, n: int):
+    from ._validate import JaxrockInputError
+
+    if n < 1:
+        raise JaxrockInputError(f"{name} = {n}; valid: an integer >= 1")
+
+
+def _axis(name: str, lo: float, hi: float, n: int) -> np.ndarray:
+    from ._validate import JaxrockInputError, check_positive
+
+    _check_count(f"--n-{name}", n)
+    check_positive(f"--{name}-min", lo)
+    check_positive(f"--{name}-max", hi)
+    if n > 1 and not hi > lo:
+        raise JaxrockInputError(f"--{name}-max = {hi:g} must be > --{name}-min = {lo:g}")
+    return np.linspace(lo, hi, n) if n > 1 else np.asarray([lo], dtype=float)
+
+
+def parse_values(name: str, text: str) -> np.ndarray:
+    """A list option: "1,2,5" (values) or "a:b:n" (n values evenly spaced from a to b)."""
+    from ._validate import JaxrockInputError
+
+    text = text.strip()
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            n = int(n)
+            _check_count(f"{name} (a:b:n) n", n)
+            return np.linspace(float(a), float(b), n)
+        vals = [float(v) for v in text.replace(" ", ",").split(",") if v]
+    except ValueError:
+        raise JaxrockInputError(f"{name} = {text!r}; expected numbers '1,2,5' or a range 'a:b:n'") from None
+    if not vals:
+        raise JaxrockInputError(f"{name} is empty; expected numbers '1,2,5' or a range 'a:b:n'")
+    return np.asarray(vals, dtype=float)
+
+
+def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alpha_base=None, *, undamped=False,
+                eta=None, cbar=None, E=30e9, rho=2500.0, zeta=0.01):
+    """The model of a CLI scene. The spring wiring is deliberately thin: `SpringModel(block, column,
+    cbar=...)` with its defaults (quasi-rigid with added masses for `spring`)."""
+    import jax.numpy as jnp
+
+    from ._validate import JaxrockInputError
+    from .geometry import Block
+    from .rigid import RigidModel
+
+    kind = ModelKind(model)
+    block = Block.from_slenderness(height, tan_alpha, tan_alpha_base)
+    if kind is ModelKind.rigid:
+        if cbar is not None:
+            raise JaxrockInputError("--cbar applies to the spring models only (rigid: --eta or --undamped)")
+        if undamped and eta is not None:
+            raise JaxrockInputError("give --undamped or --eta, not both")
+        e = 1.0 if undamped else eta
+        return RigidModel(block, eta=None if e is None else jnp.asarray(e, dtype=float))
+    from .spring import Column, SpringModel
+
+    if eta is not None:
+        raise JaxrockInputError("--eta applies to the rigid model only (spring: --cbar or --undamped)")
+    if undamped and cbar is not None:
+        raise JaxrockInputError("give --undamped or --cbar, not both")
+    c = 0.0 if undamped else cbar
+    column = Column(E, rho) if kind is ModelKind.spring_flexible else None
+    return SpringModel(block, column, cbar=c, zeta=zeta)
+
+
+def even_batch(n: int, limit: int) -> int:
+    """A batch size that splits n cells into equal batches of at most `limit`, about four or more
+    of them (a progress bar that moves), so that no smaller last batch needs its own compilation.
+    Falls back to `min(n, limit)` when n has no suitable divisor."""
+    if n <= 256:
+        return min(n, limit)
+    k0 = max(4, -(-n // limit))
+    for k in range(k0, k0 + 64):
+        if n % k == 0 and n // k >= 64:
+            return n // k
+    return min(n, limit)
+
+
+# ----------------------------------------------------------------------------------------------
+# spectrum
+# ----------------------------------------------------------------------------------------------
+def spectrum_summary(spec, seconds: float) -> str:
+    from .results import STATUS_NAMES
+
+    a = spec.attrs
+    n_a, n_w = spec.max_theta.shape
+    n = n_a * n_w
+    lines = [
+        f"spectrum: {a.get('model')}, {a.get('pulse')}, 2h = {float(a['height']):g} m, "
+        f"tanα = {float(a['tan_alpha']):.4g} (α = {float(a['alpha']):.4g} rad, p = {float(a['p']):.4g} rad/s)",
+        f"grid: {n_w} ω_p/p in [{spec.omega_ratio[0]:g}, {spec.omega_ratio[-1]:g}] × {n_a} a_p/(g tanα) in "
+        f"[{spec.accel_ratio[0]:g}, {spec.accel_ratio[-1]:g}] = {n} cells in {seconds:.1f} s ({1e3 * seconds / n:.2f} ms/cell)",
+        f"overturned: {int(spec.overturned.sum())} cells ({100 * spec.overturned.mean():.1f} %), "
+        f"uplifted: {int(spec.uplifted.sum())} ({100 * spec.uplifted.mean():.1f} %)",
+        "status: " + ", ".join(f"{STATUS_NAMES[k]} {int(c)}" for k, c in enumerate(np.bincount(spec.status.ravel(), minlength=len(STATUS_NAMES))) if c),
+    ]
+    for name, b in (("uplift", spec.uplift_boundary), ("overturning", spec.overturn_boundary)):
+        fin = np.isfinite(b)
+        if fin.any():
+            rng = f"{np.min(b[fin]):.3g} … {np.max(b[fin]):.3g}"
+            none = "" if fin.all() else f" ({int((~fin).sum())} ω_p/p columns: none in the grid)"
+            lines.append(f"least {name} a_p/(g tanα): {rng}{none}")
+        else:
+            lines.append(f"least {name} a_p/(g tanα): none in the grid")
+    return "\n".join(lines)
+
+
+@app.command()
+@_handles_input_errors
+def spectrum(
+    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid (RM), spring (quasi-rigid SM with added masses), spring-flexible (SM, concrete column)"),
+    height: float = typer.Option(10.0, help="full height 2h [m]"),
+    tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
+    tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h, in [tanα, 1)"),
+    pulse: PulseKind = typer.Option(PulseKind.symmetric, help="Ricker pulse shape"),
+    omega_min: float = typer.Option(1.0, help="smallest ω_p/p"),
+    omega_max: float = typer.Option(15.0, help="largest ω_p/p"),
+    n_omega: int = typer.Option(48, help="number of ω_p/p values"),
+    accel_min: float = typer.Option(0.5, help="smallest a_p/(g tanα)"),
+    accel_max: float = typer.Option(10.0, help="largest a_p/(g tanα)"),
+    n_accel: int = typer.Option(48, help="number of a_p/(g tanα) values"),
+    out: Path = typer.Option(Path("out/spectrum"), help="output stem: writes <out>.nc (netCDF) and <out>.png"),
+    undamped: bool = typer.Option(False, "--undamped", help="no energy loss: η = 1 (rigid) or c̄ = 0 (spring)"),
+    checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in <out>.checkpoint.npz; a rerun resumes"),
+    batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into equal batches"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
+    from .spectra import overturning_spectrum
+
+    wr = _axis("omega", omega_min, omega_max, n_omega)
+    ar = _axis("accel", accel_min, accel_max, n_accel)
+    _check_count("--batch-size", batch_size)
+    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped)
+    ck = Path(f"{out}.checkpoint.npz") if checkpoint else None
+    t0 = time.perf_counter()
+    bs = even_batch(wr.size * ar.size, batch_size)
+    spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, batch_size=bs, progress=not quiet, checkpoint=ck)
+    seconds = time.perf_counter() - t0
+    spec = type(spec)(**{**{f: getattr(spec, f) for f in ("omega_ratio", "accel_ratio", "max_theta", "overturned", "uplifted", "status")},
+                         "attrs": {**spec.attrs, "model_kind": model.value, "undamped": int(undamped)}})
+    nc = spec.save(Path(f"{out}.nc"))
+    from .plotting import plot_spectrum
+
+    import matplotlib.pyplot as plt
+
+    title = f"{model.value}{' (undamped)' if undamped else ''}, {pulse.value} pulse, 2h = {height:g} m, tanα = {tan_alpha:g}"
+    fig = plot_spectrum(spec, title=title, path=Path(f"{out}.png"))
+    plt.close(fig)
+    typer.echo(spectrum_summary(spec, seconds))
+    typer.echo(f"wrote {nc} and {out}.png")
+
+
+# ----------------------------------------------------------------------------------------------
+# simulate
+# ----------------------------------------------------------------------------------------------
+def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio):
+    from ._validate import JaxrockInputError, check_range
+    from .spectra import PULSES
+
+    if record is not None:
+        for name, v in (("--a-p", a_p), ("--accel-ratio", accel_ratio), ("--omega-p", omega_p), ("--omega-ratio", omega_ratio)):
+            if v is not None:
+                raise JaxrockInputError(f"{name} applies to Ricker pulses, not to --record")
+        check_range("--scale", scale, 0.0, math.inf, hi_open=True)
+        if record.lower() in ("elcentro", "el-centro", "el_centro"):
+            from .records import el_centro
+
+            rec = el_centro()
+        else:
+            from .records import read_record
+
+            if not Path(record).is_file():
+                raise JaxrockInputError(f"--record {record}: file not found")
+            rec = read_record(record)
+        return rec.scaled(scale), f"{rec.name} × {scale:g}"
+    if a_p is not None and accel_ratio is not None:
+        raise JaxrockInputError("give --a-p or --accel-ratio, not both")
+    if omega_p is not None and omega_ratio is not None:
+        raise JaxrockInputError("give --omega-p or --omega-ratio, not both")
+    if a_p is None:
+        accel_ratio = 4.0 if accel_ratio is None else accel_ratio
+        check_range("--accel-ratio", accel_ratio)
+        a_p = accel_ratio * float(block.uplift_acceleration)
+    if omega_p is None:
+        if omega_ratio is None:
+            omega_p = 2 * math.pi
+        else:
+            check_range("--omega-ratio", omega_ratio, 0.0, math.inf, lo_open=True, hi_open=True)
+            omega_p = omega_ratio * float(block.p_r)
+    exc = PULSES[pulse](a_p, omega_p)
+    desc = (f"{pulse} Ricker pulse a_p = {a_p:.4g} m/s² ({a_p / float(block.uplift_acceleration):.4g} g tanα), "
+            f"ω_p = {omega_p:.4g} rad/s ({omega_p / float(block.p_r):.4g} p)")
+    return exc, desc
+
+
+def solution_summary(sol, model) -> str:
+    from .results import status_names
+
+    a = float(model.block.alpha_r)
+    t_over = float(np.asarray(sol.t_overturn))
+    t_up = float(np.asarray(sol.t_uplift))
+    lines = [
+        f"max θ/α = {float(np.asarray(sol.max_theta)):.6f}",
+        f"overturned: {'yes, at t = %.4f s' % t_over if bool(np.asarray(sol.overturned)) else 'no'}",
+        f"uplifted: {'yes, at t = %.4f s' % t_up if bool(np.asarray(sol.uplifted)) else 'no'}",
+        f"impacts: {int(np.asarray(sol.n_impacts))}",
+        f"status: {status_names(sol.status)}",
+        f"(α = {a:.5g} rad, p = {float(model.block.p_r):.5g} rad/s)",
+    ]
+    return "\n".join(lines)
+
+
+@app.command()
+@_handles_input_errors
+def simulate(
+    height: float = typer.Option(10.0, help="full height 2h [m]"),
+    tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
+    tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h"),
+    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid, spring (quasi-rigid SM), spring-flexible"),
+    pulse: PulseKind = typer.Option(PulseKind.symmetric, help="Ricker pulse shape"),
+    a_p: Optional[float] = typer.Option(None, "--a-p", help="pulse amplitude [m/s²] (default: --accel-ratio 4)"),
+    accel_ratio: Optional[float] = typer.Option(None, help="pulse amplitude as a_p/(g tanα) (default 4)"),
+    omega_p: Optional[float] = typer.Option(None, help="pulse frequency [rad/s] (default 2π)"),
+    omega_ratio: Optional[float] = typer.Option(None, help="pulse frequency as ω_p/p"),
+    record: Optional[str] = typer.Option(None, help="a record file (.AT2 or two-column) or 'elcentro', instead of a pulse"),
+    scale: float = typer.Option(1.0, help="factor on the record"),
+    undamped: bool = typer.Option(False, "--undamped", help="η = 1 (rigid) or c̄ = 0 (spring)"),
+    eta: Optional[float] = typer.Option(None, help="rigid: impact velocity ratio (default 1 − 1.5 sin²α)"),
+    cbar: Optional[float] = typer.Option(None, help="spring: damper c̄ (default eq. 17)"),
+    E: float = typer.Option(30e9, "--E", help="spring-flexible: Young's modulus [Pa]"),
+    rho: float = typer.Option(2500.0, help="spring-flexible: density [kg/m³]"),
+    zeta: float = typer.Option(0.01, help="spring-flexible: column damping ratio"),
+    plot: Optional[Path] = typer.Option(None, help="write a time-history plot (PNG) here"),
+    t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
+    n_points: int = typer.Option(1500, help="plot: number of saved time points"),
+):
+    """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
+    from . import simulate as _simulate
+    from .plotting import plot_history
+    from .results import Save
+
+    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta)
+    exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio)
+    t0 = time.perf_counter()
+    sol = _simulate(m, exc)
+    seconds = time.perf_counter() - t0
+    typer.echo(f"{model.value} model, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}")
+    typer.echo(solution_summary(sol, m))
+    typer.echo(f"run time {seconds:.2f} s (with compilation)")
+    if plot is not None:
+        from ._validate import check_positive
+
+        _check_count("--n-points", n_points)
+        p = float(m.block.p_r)
+        if t_free is not None:
+            check_positive("--t-free", t_free)
+        tf = 2 * 2 * math.pi / p if t_free is None else t_free
+        t_start, t_end = float(exc.t_start), float(exc.t_end)
+        if record is None:  # the pulse window is generous (|üg| < 1e-13 a_p): show its core, |ω_p t| <= 8
+            w = float(exc.omega_p)
+            t_start, t_end = max(t_start, -8.0 / w), min(t_end, 8.0 / w)
+        ts = np.linspace(t_start, t_end + tf, n_points)
+        hist = _simulate(m, exc, save=Save(ts, ("theta",)))
+        import matplotlib.pyplot as plt
+
+        fig = plot_history(hist, exc, model=m, path=plot, title=f"{model.value}, 2h = {height:g} m, tanα = {tan_alpha:g}\n{desc}")
+        plt.close(fig)
+        typer.echo(f"wrote {plot}")
+
+
+# ----------------------------------------------------------------------------------------------
+# batch
+# ----------------------------------------------------------------------------------------------
+@app.command()
+@_handles_input_errors
+def batch(
+    scenes: Path = typer.Argument(..., help="scenes CSV (one scene per row; see `jaxrock.batch`)"),
+    results: Path = typer.Argument(..., help="results CSV to write"),
+    resume: bool = typer.Option(False, "--resume", help="skip rows already in the results file"),
+    chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """Run a CSV of scenes (vmapped, grouped by structure) and write a results CSV.
+
+    Columns: height, tan_alpha | width, [tan_alpha_base], [model: rigid | spring | spring-flexible],
+    [pulse: symmetric | antisymmetric | elcentro | FILE], a_p | accel_ratio, omega_p | omega_ratio,
+    [scale], [eta], [cbar], [E], [rho], [zeta]. Results: the inputs plus max_theta, overturned,
+    t_overturn, uplifted, t_uplift, n_impacts, status.
+    """
+    from .batch import run_scenes
+
+    rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet)
+    typer.echo(
+        f"{rep.n_rows} rows: {rep.n_run} run in {rep.n_groups} group(s), {rep.n_skipped} skipped (already done); "
+        f"{rep.seconds:.1f} s"
+    )
+    typer.echo(f"overturned: {rep.n_overturned}; status: " + ", ".join(f"{k} {v}" for k, v in rep.status_counts.items()))
+    typer.echo(f"wrote {rep.path}")
+
+
+# ----------------------------------------------------------------------------------------------
+# record spectrum
+# ----------------------------------------------------------------------------------------------
+@app.command("record-spectrum")
+@_handles_input_errors
+def record_spectrum(
+    record: str = typer.Option("elcentro", help="record file (.AT2 or two-column text), or 'elcentro' (packaged El Centro 1940 NS)"),
+    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid, spring, spring-flexible"),
+    tan_alpha: float = typer.Option(0.2, help="slenderness tanα"),
+    tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′"),
+    heights: str = typer.Option("1,2,3,5,7,10,15,20", help="body heights 2h [m]: '1,2,5' or 'a:b:n'"),
+    scales: str = typer.Option("0.25:12:48", help="record factors swept before refinement: '1,2,5' or 'a:b:n'"),
+    refine: int = typer.Option(8, help="bisections refining the least overturning factor"),
+    out: Path = typer.Option(Path("out/record_spectrum"), help="output stem: <out>.nc, <out>.csv, <out>.png"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """Least scale factor of a record that overturns the body, per height (paper figure 10)."""
+    from ._validate import JaxrockInputError
+    from .plotting import plot_record_spectrum
+    from .spectra import record_overturning_scale
+
+    hs = parse_values("--heights", heights)
+    sc = parse_values("--scales", scales)
+    if refine < 0:
+        raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
+    m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
+    exc, desc = _excitation(m.block, "symmetric", record, 1.0, None, None, None, None)
+    t0 = time.perf_counter()
+    rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet)
+    seconds = time.perf_counter() - t0
+    rs = type(rs)(height=rs.height, scale=rs.scale, bracket_low=rs.bracket_low, attrs={**rs.attrs, "model_kind": model.value})
+    out.parent.mkdir(parents=True, exist_ok=True)
+    nc = rs.save(Path(f"{out}.nc"))
+    csv_path = Path(f"{out}.csv")
+    with open(csv_path, "w") as fh:
+        fh.write("height,least_scale,bracket_low\n")
+        for h, s, lo in zip(rs.height, rs.scale, rs.bracket_low):
+            fh.write(f"{h!r},{s!r},{lo!r}\n")
+    import matplotlib.pyplot as plt
+
+    fig = plot_record_spectrum([rs], [f"{model.value}, tanα = {tan_alpha:g}"], path=Path(f"{out}.png"),
+                               title=f"least overturning factor of {desc}")
+    plt.close(fig)
+    typer.echo(f"{desc}; {model.value} model, tanα = {tan_alpha:g}; {len(hs)} heights × {len(sc)} factors in {seconds:.1f} s")
+    typer.echo(f"{'2h [m]':>8} {'least factor':>13}")
+    for h, s in zip(rs.height, rs.scale):
+        typer.echo(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}")
+    typer.echo(f"wrote {nc}, {csv_path}, {out}.png")
+
+
+# ----------------------------------------------------------------------------------------------
+# calibrate
+# ----------------------------------------------------------------------------------------------
+@app.command()
+@_handles_input_errors
+def calibrate(
+    out: Path = typer.Option(Path("out/calibration"), help="output folder (calibration.csv and the figures)"),
+    tan_alphas: Optional[str] = typer.Option(None, help="slenderness values to calibrate at ('0.1,0.2,0.3' or 'a:b:n'; default 0.05:0.35:13)"),
+    max_iter: int = typer.Option(300, help="optimiser iterations at most"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """Calibrate the spring model's damper c̄ against the rigid model's η⁴ (paper eq. 17, figure 7)."""
+    # Thin wrapper over jaxrock.calibration.calibration_report (owned by the calibration module).
+    from ._validate import check_range
+    from .calibration import calibration_report
+
+    _check_count("--max-iter", max_iter)
+    ta = None
+    if tan_alphas is not None:
+        ta = parse_values("--tan-alphas", tan_alphas)
+        check_range("--tan-alphas", ta, 0.0, 1.0, lo_open=True, hi_open=True)
+    t0 = time.perf_counter()
+    rep = calibration_report(out, tan_alphas=ta, progress=not quiet, max_iter=max_iter)
+    typer.echo(rep.format_table())
+    typer.echo(f"{time.perf_counter() - t0:.1f} s; wrote " + ", ".join(str(p) for p in rep.files.values()))
+
+
+def main():  # pragma: no cover
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    app()

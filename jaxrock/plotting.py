@@ -1,0 +1,286 @@
+"""Figures in the style of the paper: overturning spectra (figures 6, 9, 11, 15), their uplift and
+overturning boundary lines (figures 12, 16), time histories (figures 5, 8, 13) and record spectra
+(figure 10).
+
+Every function returns the matplotlib `Figure` and, with `path=...`, also writes it as a PNG.
+The data each plot draws is kept on the figure as `fig.jaxrock_data` (a dict of numpy arrays), so
+tests and scripts can check what was drawn without reading pixels.
+
+matplotlib's non-interactive Agg backend is selected on import when no display is available
+(no `DISPLAY`/`WAYLAND_DISPLAY` on Linux), so the functions work on headless machines.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import matplotlib
+
+if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+    if "matplotlib.pyplot" not in sys.modules:
+        matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.colors import BoundaryNorm, ListedColormap  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+
+from .geometry import G  # noqa: E402
+
+CMAP = "viridis"  # perceptually uniform
+OVERTURN_COLOR = "0.55"  # grey fill (with hatching) for overturned cells
+LEVELS = np.linspace(0.0, 1.0, 11)
+
+X_LABEL = r"$\omega_p/p$"
+Y_LABEL = r"$a_p/(g\,\tan\alpha)$"
+CBAR_LABEL = r"$\theta_{\max}/\alpha$"
+
+
+def _finish(fig, path, data):
+    fig.jaxrock_data = data
+    if path is not None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=150, bbox_inches="tight")
+    return fig
+
+
+def _title_of(spectrum) -> str:
+    a = spectrum.attrs
+    parts = [str(a.get("model", ""))]
+    if "tan_alpha" in a:
+        parts.append(f"tanα = {float(a['tan_alpha']):.3g}")
+    if "height" in a:
+        parts.append(f"2h = {float(a['height']):.3g} m")
+    if "pulse" in a:
+        parts.append(str(a["pulse"]))
+    return ", ".join(p for p in parts if p)
+
+
+def boundary_lines(spectrum) -> dict:
+    """The bold lines of a spectrum plot: x = ω_p/p, the least uplifting and overturning a_p/(g tanα)."""
+    return {
+        "omega_ratio": np.asarray(spectrum.omega_ratio, dtype=float),
+        "uplift": np.asarray(spectrum.uplift_boundary, dtype=float),
+        "overturn": np.asarray(spectrum.overturn_boundary, dtype=float),
+    }
+
+
+def _draw_spectrum(ax, spectrum, title, *, colorbar=True):
+    x = np.asarray(spectrum.omega_ratio, dtype=float)
+    y = np.asarray(spectrum.accel_ratio, dtype=float)
+    z = np.clip(np.asarray(spectrum.max_theta, dtype=float), 0.0, 1.0)
+    over = np.asarray(spectrum.overturned, dtype=bool)
+    bad = np.asarray(spectrum.status) != 0
+    # Overturned cells (θ_max/α = 1) are covered by their own grey, hatched region on top.
+    if x.size >= 2 and y.size >= 2:
+        cs = ax.contourf(x, y, z, levels=LEVELS, cmap=CMAP, extend="neither")
+        if over.any():
+            ax.contourf(
+                x, y, over.astype(float), levels=[0.5, 1.5], colors=[OVERTURN_COLOR], hatches=["//"], alpha=1.0
+            )
+    else:  # a single row or column: contours need a 2-D grid, fall back to cells
+        cs = ax.pcolormesh(x, y, z, cmap=CMAP, norm=BoundaryNorm(LEVELS, 256), shading="nearest")
+        if over.any():
+            ax.pcolormesh(x, y, np.where(over, 1.0, np.nan), cmap=ListedColormap([OVERTURN_COLOR]), shading="nearest")
+    lines = boundary_lines(spectrum)
+    ax.plot(lines["omega_ratio"], lines["uplift"], color="k", lw=2.5, label="uplift")
+    # dashed black on a white line: visible on the colours and on the grey overturned region
+    ax.plot(lines["omega_ratio"], lines["overturn"], color="w", lw=3.5)
+    ax.plot(lines["omega_ratio"], lines["overturn"], color="k", lw=2.5, ls="--", label="overturn")
+    if bad.any():
+        yy, xx = np.nonzero(bad)
+        ax.plot(x[xx], y[yy], "rx", ms=4, label="solver status ≠ ok")
+    ax.set_xlabel(X_LABEL)
+    ax.set_ylabel(Y_LABEL)
+    ax.set_xlim(x.min(), x.max())
+    ax.set_ylim(y.min(), y.max())
+    ax.set_title(title if title is not None else _title_of(spectrum), fontsize=10)
+    cb = None
+    if colorbar:
+        cb = ax.figure.colorbar(cs, ax=ax, ticks=LEVELS[::2])
+        cb.set_label(CBAR_LABEL)
+    return cs, cb
+
+
+def _legend_handles():
+    from matplotlib.lines import Line2D
+
+    return [
+        Line2D([], [], color="k", lw=2.5, label="least uplift"),
+        Line2D([], [], color="k", lw=2.5, ls="--", label="least overturning"),
+        Patch(facecolor=OVERTURN_COLOR, hatch="//", label="overturned"),
+    ]
+
+
+def plot_spectrum(spectrum, ax=None, title=None, *, path=None, legend=True):
+    """Filled contours of θ_max/α over (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11, 15).
+
+    Overturned cells are grey and hatched; the least uplifting acceleration (solid) and the least
+    overturning one (dashed) are drawn bold; cells whose run did not end with `Status.ok` are
+    marked with red crosses. Returns the figure (`fig.jaxrock_data` holds the boundary lines).
+    """
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(6.0, 4.6))
+    else:
+        fig = ax.figure
+    _draw_spectrum(ax, spectrum, title)
+    if legend:
+        ax.legend(handles=_legend_handles(), loc="upper left", fontsize=7, framealpha=0.8)
+    data = boundary_lines(spectrum)
+    data["max_theta"] = np.asarray(spectrum.max_theta)
+    return _finish(fig, path, data)
+
+
+def plot_spectra_grid(spectra, titles=None, *, ncols=None, path=None, suptitle=None):
+    """Several spectra side by side with a shared colourbar (e.g. RM | SM | SM + masses)."""
+    spectra = list(spectra)
+    n = len(spectra)
+    if n == 0:
+        raise ValueError("plot_spectra_grid needs at least one spectrum")
+    titles = [None] * n if titles is None else list(titles)
+    ncols = n if ncols is None else int(ncols)
+    nrows = -(-n // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.6 * nrows), squeeze=False, constrained_layout=True)
+    cs = None
+    for k, (s, t) in enumerate(zip(spectra, titles)):
+        cs, _ = _draw_spectrum(axes.flat[k], s, t, colorbar=False)
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    cb = fig.colorbar(cs, ax=axes, ticks=LEVELS[::2], shrink=0.9)
+    cb.set_label(CBAR_LABEL)
+    axes.flat[0].legend(handles=_legend_handles(), loc="upper left", fontsize=7, framealpha=0.8)
+    if suptitle:
+        fig.suptitle(suptitle)
+    data = {"boundaries": [boundary_lines(s) for s in spectra]}
+    return _finish(fig, path, data)
+
+
+def plot_boundaries(spectra, labels=None, ax=None, *, path=None, title=None):
+    """Uplift (solid) and overturning (dashed) boundary lines of several spectra on one axes
+    (paper figures 12 and 16); one colour per spectrum."""
+    spectra = list(spectra)
+    labels = [_title_of(s) for s in spectra] if labels is None else list(labels)
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(6.0, 4.6))
+    else:
+        fig = ax.figure
+    data = []
+    for k, (s, lab) in enumerate(zip(spectra, labels)):
+        b = boundary_lines(s)
+        c = f"C{k % 10}"
+        ax.plot(b["omega_ratio"], b["uplift"], "-", color=c, lw=2, label=f"{lab}: uplift")
+        ax.plot(b["omega_ratio"], b["overturn"], "--", color=c, lw=2, label=f"{lab}: overturn")
+        data.append(b)
+    ax.axhline(1.0, color="0.6", lw=0.8, ls=":")
+    ax.set_xlabel(X_LABEL)
+    ax.set_ylabel(Y_LABEL)
+    if title:
+        ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7)
+    return _finish(fig, path, {"boundaries": data, "labels": labels})
+
+
+def plot_history(solution, excitation, fields=("theta",), *, model=None, alpha=None, path=None, title=None):
+    """θ/α over time with the ground acceleration üg/g below (paper figures 5, 8, 13).
+
+    `solution` must carry a history (`simulate(..., save=Save(ts, fields))`). θ is normalised by
+    `alpha`, by default the rocking slenderness α′ of `model`'s block; with neither, the raw θ
+    [rad] is drawn. Further saved fields (e.g. "u_top", "base_moment" of the spring model) get
+    their own panels. The overturning time, if any, is marked by a vertical line.
+    """
+    if alpha is None and model is not None:
+        alpha = float(model.block.alpha_r)
+    if solution.ts is None or solution.history is None:
+        raise ValueError("plot_history needs a Solution with a time history: simulate(..., save=Save(ts, fields))")
+    fields = tuple(fields)
+    missing = [f for f in fields if f not in solution.history]
+    if missing:
+        raise ValueError(f"fields {missing} were not saved; saved: {sorted(solution.history)}")
+    ts = np.asarray(solution.ts, dtype=float)
+    ug = np.asarray(_eval_many(excitation, ts), dtype=float)
+    n = len(fields) + 1
+    fig, axes = plt.subplots(n, 1, figsize=(7.0, 1.9 * n + 0.8), sharex=True, squeeze=False, constrained_layout=True)
+    axes = axes[:, 0]
+    data = {"t": ts, "ug_over_g": ug / G}
+    t_over = float(np.asarray(solution.t_overturn))
+    for ax, f in zip(axes, fields):
+        y = np.asarray(solution.history[f], dtype=float)
+        if f == "theta" and alpha is not None:
+            y = y / float(alpha)
+            ax.set_ylabel(r"$\theta/\alpha$")
+            ax.axhline(1.0, color="0.6", lw=0.8, ls=":")
+            ax.axhline(-1.0, color="0.6", lw=0.8, ls=":")
+        else:
+            ax.set_ylabel(f)
+        ax.plot(ts, y, "k-", lw=1.2)
+        ax.axhline(0.0, color="0.8", lw=0.6)
+        data[f] = y
+    axes[-1].plot(ts, ug / G, color="C0", lw=1.0)
+    axes[-1].set_ylabel(r"$\ddot u_g/g$")
+    axes[-1].set_xlabel("t [s]")
+    if np.isfinite(t_over):
+        for ax in axes:
+            ax.axvline(t_over, color="C3", lw=1.2, ls="--")
+        axes[0].annotate(f"overturns at t = {t_over:.3g} s", (t_over, 0.95), xycoords=("data", "axes fraction"),
+                         color="C3", fontsize=8, ha="right", va="top")
+    data["t_overturn"] = t_over
+    if title:
+        axes[0].set_title(title, fontsize=10)
+    return _finish(fig, path, data)
+
+
+def _eval_many(excitation, ts):
+    import jax
+
+    return jax.jit(jax.vmap(excitation))(ts)
+
+
+def plot_record_spectrum(record_spectra, labels=None, *, x="height", ax=None, path=None, title=None):
+    """Least overturning scale factor of a record against 2h (`x="height"`) or p (`x="p"`)
+    (paper figure 10); one line per `RecordSpectrum`. Heights where no factor of the sweep
+    overturned the body (scale = inf) are left out of the line and marked with a triangle at the
+    top of the axes."""
+    record_spectra = list(record_spectra)
+    labels = [str(r.attrs.get("model", "")) for r in record_spectra] if labels is None else list(labels)
+    if x not in ("height", "p"):
+        raise ValueError(f"x = {x!r}; valid: 'height', 'p'")
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(6.0, 4.2))
+    else:
+        fig = ax.figure
+    data = []
+    for k, (rs, lab) in enumerate(zip(record_spectra, labels)):
+        h = np.asarray(rs.height, dtype=float)
+        s = np.asarray(rs.scale, dtype=float)
+        if x == "p":
+            tan_a = float(rs.attrs.get("tan_alpha_base", rs.attrs.get("tan_alpha")))
+            R = 0.5 * h * np.sqrt(1 + tan_a**2)
+            xv = np.sqrt(3 * G / (4 * R))
+        else:
+            xv = h
+        fin = np.isfinite(s)
+        ax.plot(xv[fin], s[fin], "o-", color=f"C{k % 10}", label=lab, ms=4)
+        if (~fin).any():
+            ax.plot(xv[~fin], np.ones((~fin).sum()), "^", color=f"C{k % 10}", transform=ax.get_xaxis_transform(),
+                    clip_on=False, ms=6)
+        data.append({"x": xv, "scale": s})
+    ax.set_xlabel("2h [m]" if x == "height" else "p [rad/s]")
+    ax.set_ylabel("least overturning scale factor")
+    ax.set_ylim(bottom=0)
+    if title:
+        ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    return _finish(fig, path, {"lines": data, "labels": labels})
+
+
+__all__ = [
+    "plot_spectrum",
+    "plot_spectra_grid",
+    "plot_boundaries",
+    "plot_history",
+    "plot_record_spectrum",
+    "boundary_lines",
+]
