@@ -105,7 +105,7 @@ class AbstractRicker(AbstractExcitation):
 
     @property
     def step_ts(self):
-        return self.times
+        return None
 
     def next_exceedance(self, t, level):
         t = jnp.asarray(t, dtype=float)
@@ -261,7 +261,7 @@ class Record(AbstractExcitation):
 
     @property
     def step_ts(self):
-        return None
+        return self.times
 
     def next_exceedance(self, t, level):
         t = jnp.asarray(t, dtype=float)
