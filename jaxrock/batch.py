@@ -217,7 +217,8 @@ def _check_row(row: _Row, base: Path, cache: dict) -> tuple[object, object, str]
     try:
         if kind == "rigid":
             eta = row.num("eta", 0.0, 1.0)
-            model = RigidModel(block, eta=None if eta is None else jnp.asarray(eta, dtype=float))
+            # the default η′ given explicitly: rows with and without `eta` share one batch
+            model = RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
         else:
             from .spring import Column, SpringModel
 
@@ -359,7 +360,7 @@ def _rigid_stacked(model, exc, integ):
     dyn_m, st_m = eqx.partition(model, eqx.is_array)
     dyn_e, st_e = eqx.partition(exc, eqx.is_array)
     dyn_m, dyn_e = to_np(dyn_m), to_np(dyn_e)
-    small = max(1, n // 16)
+    small = n // 16 if n >= 64 else n  # small batches: no compaction, one compiled shape
     used = 0
     while used < integ.max_iterations:
         todo = np.flatnonzero(~np.asarray(rigid.is_finished(carry)))
@@ -464,8 +465,12 @@ def _chunks(idx: list[int], size: int):
         yield idx[lo : lo + size]
 
 
+_MIN_PAD = 8
+
+
 def _pad_size(k: int, chunk: int) -> int:
-    return min(chunk, 1 << max(0, (k - 1).bit_length()))
+    """Batch shapes: powers of two from 8 up to the chunk size (few compilations)."""
+    return min(chunk, max(_MIN_PAD, 1 << max(0, (k - 1).bit_length())))
 
 
 def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: int = 256, progress: bool = True) -> BatchReport:

@@ -256,6 +256,20 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
     return exc, desc
 
 
+@functools.cache
+def _jitted_simulate():
+    import equinox as eqx
+
+    from .model import simulate as _simulate
+
+    return eqx.filter_jit(_simulate)
+
+
+def _simulate(model, excitation, save=None):
+    """`jaxrock.simulate`, jitted (one compilation per model/excitation structure per process)."""
+    return _jitted_simulate()(model, excitation, save=save)
+
+
 def solution_summary(sol, model) -> str:
     from .results import status_names
 
@@ -298,7 +312,6 @@ def simulate(
     n_points: int = typer.Option(1500, help="plot: number of saved time points"),
 ):
     """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
-    from . import simulate as _simulate
     from .plotting import plot_history
     from .results import Save
 

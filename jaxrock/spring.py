@@ -344,7 +344,7 @@ class SpringIntegrator(AbstractIntegrator):
 
     rtol: float = eqx.field(static=True, default=1e-6)
     atol: float = eqx.field(static=True, default=1e-6)
-    solver: str = eqx.field(static=True, default="kvaerno5")
+    solver: str = eqx.field(static=True, default="kvaerno3")
     max_steps: int = eqx.field(static=True, default=20_000)
     root_finder: str = eqx.field(static=True, default="newton")
 

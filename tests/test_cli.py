@@ -1,0 +1,231 @@
+"""The command line: outputs equal the library's results on the same inputs; bad input exits 2.
+
+Grids are tiny (3×3) and scenes few: the cost is compilation, shared within the process (the CLI
+runs in-process under CliRunner, so its jitted functions are reused by the direct calls).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+
+import equinox as eqx
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import jaxrock as jr
+from jaxrock.cli import app, even_batch, parse_values
+from jaxrock.spectra import Spectrum, overturning_spectrum
+
+runner = CliRunner()
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+# -- spectrum --------------------------------------------------------------------------------------
+def test_spectrum_writes_nc_equal_to_library_and_png(tmp_path):
+    out = tmp_path / "spec"
+    r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
+               "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "spec.png").stat().st_size > 1000
+    assert not (tmp_path / "spec.checkpoint.npz").exists()  # removed once complete
+    spec = Spectrum.load(tmp_path / "spec.nc")
+    model = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
+    ref = overturning_spectrum(model, np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3), batch_size=9, progress=False)
+    np.testing.assert_array_equal(spec.omega_ratio, ref.omega_ratio)
+    np.testing.assert_array_equal(spec.accel_ratio, ref.accel_ratio)
+    np.testing.assert_allclose(spec.max_theta, ref.max_theta, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(spec.overturned, ref.overturned)
+    np.testing.assert_array_equal(spec.uplifted, ref.uplifted)
+    np.testing.assert_array_equal(spec.status, ref.status)
+    assert "9 cells" in r.output and "overturned:" in r.output and "status: ok" in r.output
+    assert f"overturned: {int(ref.overturned.sum())} cells" in r.output
+
+
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["--tan-alpha", 1.5], "tan_alpha"),
+        (["--height", -1], "height"),
+        (["--n-omega", 0], "--n-omega"),
+        (["--accel-min", 2, "--accel-max", 1], "--accel-max"),
+        (["--tan-alpha-base", 0.1], "b_base"),
+    ],
+)
+def test_spectrum_bad_input_exits_2_naming_the_parameter(tmp_path, args, name):
+    r = invoke("spectrum", *args, "--out", tmp_path / "s", "--quiet")
+    assert r.exit_code == 2
+    assert name in r.output
+    assert "Traceback" not in r.output
+    assert len(r.output.strip().splitlines()) == 1
+    assert not (tmp_path / "s.nc").exists()
+
+
+def test_typer_type_errors_exit_2():
+    r = invoke("spectrum", "--n-omega", "abc")
+    assert r.exit_code == 2
+
+
+def test_every_command_has_help():
+    for cmd in ("spectrum", "simulate", "batch", "record-spectrum", "calibrate"):
+        r = invoke(cmd, "--help")
+        assert r.exit_code == 0, (cmd, r.output)
+        assert "Usage" in r.output
+
+
+def test_helpers():
+    assert even_batch(2304, 4096) == 576
+    assert 2304 % even_batch(2304, 500) == 0 and even_batch(2304, 500) <= 500
+    assert even_batch(9, 4096) == 9
+    np.testing.assert_allclose(parse_values("--x", "1:3:3"), [1, 2, 3])
+    np.testing.assert_allclose(parse_values("--x", "1, 2,5"), [1, 2, 5])
+    with pytest.raises(jr.JaxrockInputError, match="--x"):
+        parse_values("--x", "a,b")
+
+
+# -- simulate --------------------------------------------------------------------------------------
+def _printed_max(output: str) -> float:
+    return float(re.search(r"max θ/α = ([0-9.eE+-]+)", output).group(1))
+
+
+def test_simulate_prints_max_theta_of_simulate(tmp_path):
+    png = tmp_path / "h.png"
+    r = invoke("simulate", "--height", 10, "--tan-alpha", 0.2, "--accel-ratio", 4, "--omega-p", 2 * math.pi, "--plot", png,
+               "--n-points", 200)
+    assert r.exit_code == 0, r.output
+    block = jr.Block.from_slenderness(10.0, 0.2)
+    sol = jr.simulate(jr.RigidModel(block), jr.RickerPulse(4 * float(block.uplift_acceleration), 2 * math.pi))
+    assert _printed_max(r.output) == pytest.approx(float(sol.max_theta), abs=2e-6)
+    assert ("overturned: no" in r.output) == (not bool(sol.overturned))
+    assert "status: ok" in r.output
+    assert png.stat().st_size > 1000
+
+
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["--tan-alpha", 1.5], "tan_alpha"),
+        (["--height", -2], "height"),
+        (["--a-p", 1, "--accel-ratio", 2], "--a-p"),
+        (["--omega-p", -1], "omega_p"),
+        (["--record", "no/such/file.AT2"], "--record"),
+        (["--eta", 0.5, "--model", "spring"], "--eta"),
+    ],
+)
+def test_simulate_bad_input_exits_2(args, name):
+    r = invoke("simulate", *args)
+    assert r.exit_code == 2, r.output
+    assert name in r.output and "Traceback" not in r.output
+
+
+# -- batch -----------------------------------------------------------------------------------------
+SCENES = """id,height,tan_alpha,width,pulse,accel_ratio,a_p,omega_ratio,omega_p,eta
+a,10,0.2,,symmetric,4,,,6.283185307179586,
+b,5,0.15,,symmetric,3,,2,,0.9
+# a comment line
+c,20,,2,symmetric,,5,3,,1
+"""
+
+
+def _write(path, text):
+    path.write_text(text)
+    return path
+
+
+def _read(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _direct(row):
+    """The scene of one row, built by hand, run by `simulate`."""
+    h = float(row["height"])
+    ta = float(row["tan_alpha"]) if row["tan_alpha"] else float(row["width"]) / h
+    block = jr.Block.from_slenderness(h, ta)
+    a_p = float(row["a_p"]) if row["a_p"] else float(row["accel_ratio"]) * 9.81 * ta
+    w = float(row["omega_p"]) if row["omega_p"] else float(row["omega_ratio"]) * float(block.p)
+    eta = float(row["eta"]) if row["eta"] else float(block.eta)
+    model = jr.RigidModel(block, eta=np.float64(eta))
+    return _jit_sim(model, jr.RickerPulse(a_p, w))
+
+
+_jit_sim = eqx.filter_jit(lambda m, e: jr.simulate(m, e))
+
+
+def test_batch_round_trip_and_resume(tmp_path):
+    scenes = _write(tmp_path / "scenes.csv", SCENES)
+    res = tmp_path / "out" / "results.csv"
+    r = invoke("batch", scenes, res, "--quiet")
+    assert r.exit_code == 0, r.output
+    rows = _read(res)
+    assert [x["row"] for x in rows] == ["1", "2", "3"]
+    assert [x["id"] for x in rows] == ["a", "b", "c"]
+    for x in rows:
+        sol = _direct(x)
+        assert float(x["max_theta"]) == pytest.approx(float(sol.max_theta), abs=1e-9)
+        assert int(x["overturned"]) == int(sol.overturned)
+        assert float(x["t_overturn"]) == pytest.approx(float(sol.t_overturn), abs=1e-9) if sol.overturned else x["t_overturn"] == "inf"
+        assert int(x["uplifted"]) == int(sol.uplifted)
+        assert int(x["n_impacts"]) == int(sol.n_impacts)
+        assert x["status"] == "ok"
+
+    # an interrupted run: only row 2 finished (its result marked to show it is kept, not rerun)
+    with open(res) as fh:
+        lines = fh.read().splitlines()
+    kept = lines[2].split(",")
+    kept[-7] = "0.123456"  # max_theta
+    _write(res, lines[0] + "\n" + ",".join(kept) + "\n" + "1,a,10")  # + a partly written line
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 0, r.output
+    assert "1 skipped" in r.output and "2 run" in r.output
+    again = _read(res)
+    assert [x["row"] for x in again] == ["1", "2", "3"]
+    assert again[1]["max_theta"] == "0.123456"
+    for a, b in ((again[0], rows[0]), (again[2], rows[2])):
+        # rerun in other batches: equal to the root-finding tolerance, not bitwise
+        assert {k: v for k, v in a.items() if k not in ("max_theta", "t_overturn", "t_uplift")} == {
+            k: v for k, v in b.items() if k not in ("max_theta", "t_overturn", "t_uplift")
+        }
+        for k in ("max_theta", "t_overturn", "t_uplift"):
+            assert float(a[k]) == pytest.approx(float(b[k]), abs=1e-9)
+
+    # resuming against changed inputs is refused
+    _write(scenes, SCENES.replace("b,5,0.15", "b,6,0.15"))
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 2 and "row 2" in r.output
+
+
+@pytest.mark.parametrize(
+    "bad, where",
+    [
+        ("b,5,1.5,,symmetric,3,,2,,", ["row 2", "line 3", "'tan_alpha'", "(0, 1)"]),
+        ("b,-5,0.1,,symmetric,3,,2,,", ["row 2", "'height'", "(0, inf)"]),
+        ("b,5,0.1,,symmetric,3,,abc,,", ["row 2", "'omega_ratio'", "not a number"]),
+        ("b,5,0.1,,triangle,3,,2,,", ["row 2", "'pulse'", "symmetric"]),
+        ("b,5,0.1,,symmetric,,,2,,", ["row 2", "'a_p'", "accel_ratio"]),
+        ("b,5,0.1,0.5,symmetric,3,,2,,", ["row 2", "'tan_alpha'", "width"]),
+        ("b,5,0.1,,symmetric,3,,2,,1.5", ["row 2", "'eta'", "[0, 1]"]),
+    ],
+)
+def test_batch_malformed_row_fails_before_running(tmp_path, bad, where):
+    lines = SCENES.splitlines()
+    lines[2] = bad
+    scenes = _write(tmp_path / "scenes.csv", "\n".join(lines) + "\n")
+    res = tmp_path / "results.csv"
+    r = invoke("batch", scenes, res, "--quiet")
+    assert r.exit_code == 2, r.output
+    for w in where:
+        assert w in r.output, (w, r.output)
+    assert "Traceback" not in r.output
+    assert not res.exists()  # nothing ran
+
+
+def test_batch_parameter_for_wrong_model(tmp_path):
+    scenes = _write(tmp_path / "s.csv", "height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,spring,3,2,0.5\n")
+    r = invoke("batch", scenes, tmp_path / "r.csv")
+    assert r.exit_code == 2 and "'eta'" in r.output and "rigid" in r.output
