@@ -250,10 +250,10 @@ def _check_row(row: _Row, base: Path, cache: dict) -> tuple[object, object, str]
             row.fail(a_col, str(e))
         exc_kind = pulse.lower()
     else:
+        rec = _resolve_record(pulse, base, row, cache)
         for col in ("a_p", "accel_ratio", "omega_p", "omega_ratio"):
             if row.has(col):
                 row.fail(col, "applies only to Ricker pulses (pulse = symmetric / antisymmetric), not to a record")
-        rec = _resolve_record(pulse, base, row, cache)
         scale = row.num("scale", 0.0, math.inf, hi_open=True, default=1.0)
         exc = rec.scaled(scale)
         exc_kind = f"record:{rec.n}"

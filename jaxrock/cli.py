@@ -96,7 +96,7 @@ def parse_values(name: str, text: str) -> np.ndarray:
 
 
 def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alpha_base=None, *, undamped=False,
-                eta=None, cbar=None, E=30e9, rho=2500.0, zeta=0.01):
+                eta=None, cbar=None, E=None, rho=None, zeta=None):
     """The model of a CLI scene. The spring wiring is deliberately thin: `SpringModel(block, column,
     cbar=...)` with its defaults (quasi-rigid with added masses for `spring`)."""
     import jax.numpy as jnp
@@ -107,6 +107,10 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
 
     kind = ModelKind(model)
     block = Block.from_slenderness(height, tan_alpha, tan_alpha_base)
+    if kind is not ModelKind.spring_flexible:
+        for name, v in (("--E", E), ("--rho", rho), ("--zeta", zeta)):
+            if v is not None:
+                raise JaxrockInputError(f"{name} applies to --model spring-flexible only (the column's material)")
     if kind is ModelKind.rigid:
         if cbar is not None:
             raise JaxrockInputError("--cbar applies to the spring models only (rigid: --eta or --undamped)")
@@ -121,8 +125,10 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
     if undamped and cbar is not None:
         raise JaxrockInputError("give --undamped or --cbar, not both")
     c = 0.0 if undamped else cbar
-    column = Column(E, rho) if kind is ModelKind.spring_flexible else None
-    return SpringModel(block, column, cbar=c, zeta=zeta)
+    if kind is ModelKind.spring_flexible:  # concrete by default (paper sections 4-6)
+        column = Column(30e9 if E is None else E, 2500.0 if rho is None else rho)
+        return SpringModel(block, column, cbar=c, zeta=0.01 if zeta is None else zeta)
+    return SpringModel(block, None, cbar=c)
 
 
 def even_batch(n: int, limit: int) -> int:
@@ -147,9 +153,11 @@ def spectrum_summary(spec, seconds: float) -> str:
     a = spec.attrs
     n_a, n_w = spec.max_theta.shape
     n = n_a * n_w
+    tan_col = float(a["width"]) / float(a["height"])
+    base = "" if abs(tan_col - float(a["tan_alpha"])) < 1e-12 else f" on a base tanα′ = {float(a['tan_alpha']):.4g}"
     lines = [
-        f"spectrum: {a.get('model')}, {a.get('pulse')}, 2h = {float(a['height']):g} m, "
-        f"tanα = {float(a['tan_alpha']):.4g} (α = {float(a['alpha']):.4g} rad, p = {float(a['p']):.4g} rad/s)",
+        f"spectrum: {a.get('model')}, {a.get('pulse')}, 2h = {float(a['height']):g} m, tanα = {tan_col:.4g}{base} "
+        f"(rocking α = {float(a['alpha']):.4g} rad, p = {float(a['p']):.4g} rad/s)",
         f"grid: {n_w} ω_p/p in [{spec.omega_ratio[0]:g}, {spec.omega_ratio[-1]:g}] × {n_a} a_p/(g tanα) in "
         f"[{spec.accel_ratio[0]:g}, {spec.accel_ratio[-1]:g}] = {n} cells in {seconds:.1f} s ({1e3 * seconds / n:.2f} ms/cell)",
         f"overturned: {int(spec.overturned.sum())} cells ({100 * spec.overturned.mean():.1f} %), "
@@ -304,9 +312,9 @@ def simulate(
     undamped: bool = typer.Option(False, "--undamped", help="η = 1 (rigid) or c̄ = 0 (spring)"),
     eta: Optional[float] = typer.Option(None, help="rigid: impact velocity ratio (default 1 − 1.5 sin²α)"),
     cbar: Optional[float] = typer.Option(None, help="spring: damper c̄ (default eq. 17)"),
-    E: float = typer.Option(30e9, "--E", help="spring-flexible: Young's modulus [Pa]"),
-    rho: float = typer.Option(2500.0, help="spring-flexible: density [kg/m³]"),
-    zeta: float = typer.Option(0.01, help="spring-flexible: column damping ratio"),
+    E: Optional[float] = typer.Option(None, "--E", help="spring-flexible: Young's modulus [Pa] (default 30e9)"),
+    rho: Optional[float] = typer.Option(None, help="spring-flexible: density [kg/m³] (default 2500)"),
+    zeta: Optional[float] = typer.Option(None, help="spring-flexible: column damping ratio (default 0.01)"),
     plot: Optional[Path] = typer.Option(None, help="write a time-history plot (PNG) here"),
     t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
     n_points: int = typer.Option(1500, help="plot: number of saved time points"),
@@ -385,8 +393,13 @@ def record_spectrum(
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′"),
     heights: str = typer.Option("1,2,3,5,7,10,15,20", help="body heights 2h [m]: '1,2,5' or 'a:b:n'"),
-    scales: str = typer.Option("0.25:12:48", help="record factors swept before refinement: '1,2,5' or 'a:b:n'"),
-    refine: int = typer.Option(8, help="bisections refining the least overturning factor"),
+    scales: str = typer.Option(
+        "0.5:12:16",
+        help="record factors of the vmapped sweep ('1,2,5' or 'a:b:n'); the first that overturns is then refined by "
+        "bisection. A coarse sweep is cheap (a vmapped record run costs about as much per lane as a bisection step) "
+        "but can miss a narrow overturning window between two factors",
+    ),
+    refine: int = typer.Option(8, help="bisections refining the least overturning factor (resolution: sweep step / 2^refine)"),
     out: Path = typer.Option(Path("out/record_spectrum"), help="output stem: <out>.nc, <out>.csv, <out>.png"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
@@ -411,7 +424,7 @@ def record_spectrum(
     with open(csv_path, "w") as fh:
         fh.write("height,least_scale,bracket_low\n")
         for h, s, lo in zip(rs.height, rs.scale, rs.bracket_low):
-            fh.write(f"{h!r},{s!r},{lo!r}\n")
+            fh.write(f"{float(h)!r},{float(s)!r},{float(lo)!r}\n")
     import matplotlib.pyplot as plt
 
     fig = plot_record_spectrum([rs], [f"{model.value}, tanα = {tan_alpha:g}"], path=Path(f"{out}.png"),

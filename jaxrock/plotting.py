@@ -95,8 +95,10 @@ def _draw_spectrum(ax, spectrum, title, *, colorbar=True):
         ax.plot(x[xx], y[yy], "rx", ms=4, label="solver status ≠ ok")
     ax.set_xlabel(X_LABEL)
     ax.set_ylabel(Y_LABEL)
-    ax.set_xlim(x.min(), x.max())
-    ax.set_ylim(y.min(), y.max())
+    if x.size > 1:
+        ax.set_xlim(x.min(), x.max())
+    if y.size > 1:
+        ax.set_ylim(y.min(), y.max())
     ax.set_title(title if title is not None else _title_of(spectrum), fontsize=10)
     cb = None
     if colorbar:

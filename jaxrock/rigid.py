@@ -37,9 +37,9 @@ import equinox as eqx
 import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 from jaxtyping import Array, Float
 
+from ._rootfind import SafeNewton
 from ._validate import check_range
 from .excitation import AbstractExcitation
 from .geometry import G, Block
@@ -55,7 +55,7 @@ class EventIntegrator(AbstractIntegrator):
     - `solver`: an explicit diffrax solver (default `Dopri8`: high order pays at the tight default
       tolerances; see benchmarks/bench_rigid.py for the work–precision data).
     - `rtol`, `atol`: step-size control tolerances (on θ [rad] and θ̇ [rad/s]).
-    - `root_tol`: tolerance of the Newton root finds that locate the events [s].
+    - `root_tol`: tolerance of the root finds that locate the events [s].
     - `zeno_time`, `zeno_velocity`: Zeno closure thresholds, in units of 1/p′ and p′α′ (see
       module docstring).
     - `chunk_steps`: length of one loop iteration, in nominal steps. Under `vmap` all lanes move
@@ -205,9 +205,13 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
     cond_apex = lambda t, y, args, **kw: args * y[1]
     cond_over = lambda t, y, args, **kw: args * y[0] - thr * alpha
     event = diffrax.Event(
-        [cond_impact, cond_apex, cond_over],
-        root_finder=optx.Newton(rtol=integ.root_tol, atol=integ.root_tol),
-        direction=[False, False, True],
+        # diffrax gives priority by list position when several events fire in one step. Order
+        # them as they can occur in time within one flight: crossing the overturning angle comes
+        # before any apex beyond it, and an apex before the impact that ends its flight.
+        [cond_over, cond_apex, cond_impact],
+        # Safeguarded Newton on the step's dense output: plain Newton stalls at apexes where θ̈ ≈ 0.
+        root_finder=SafeNewton(rtol=integ.root_tol, atol=integ.root_tol),
+        direction=[True, False, False],
     )
     controller = diffrax.PIDController(
         rtol=integ.rtol, atol=integ.atol, dtmax=exc.max_step, step_ts=exc.step_ts
@@ -277,7 +281,7 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         )
         tf = sol.ts[-1]
         thf, omf = sol.ys[0][-1], sol.ys[1][-1]
-        hit_impact, hit_apex, hit_over = sol.event_mask
+        hit_over, hit_apex, hit_impact = sol.event_mask
         hit_impact, hit_apex, hit_over = (hit_impact & is_rocking, hit_apex & is_rocking, hit_over & is_rocking)
         chunked = is_rocking & ~(hit_impact | hit_apex | hit_over) & (tf < t_seg)
         n_acc = jnp.maximum(sol.stats["num_accepted_steps"], 1)

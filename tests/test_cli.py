@@ -11,6 +11,7 @@ import math
 import re
 
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -20,6 +21,8 @@ from jaxrock.cli import app, even_batch, parse_values
 from jaxrock.spectra import Spectrum, overturning_spectrum
 
 runner = CliRunner()
+# jaxrock.simulate, jitted: the same compiled function as the CLI's (shared cache per function)
+_jit_sim = eqx.filter_jit(jr.simulate)
 
 
 def invoke(*args):
@@ -99,7 +102,7 @@ def test_simulate_prints_max_theta_of_simulate(tmp_path):
                "--n-points", 200)
     assert r.exit_code == 0, r.output
     block = jr.Block.from_slenderness(10.0, 0.2)
-    sol = jr.simulate(jr.RigidModel(block), jr.RickerPulse(4 * float(block.uplift_acceleration), 2 * math.pi))
+    sol = _jit_sim(jr.RigidModel(block), jr.RickerPulse(4 * float(block.uplift_acceleration), 2 * math.pi))
     assert _printed_max(r.output) == pytest.approx(float(sol.max_theta), abs=2e-6)
     assert ("overturned: no" in r.output) == (not bool(sol.overturned))
     assert "status: ok" in r.output
@@ -150,11 +153,8 @@ def _direct(row):
     a_p = float(row["a_p"]) if row["a_p"] else float(row["accel_ratio"]) * 9.81 * ta
     w = float(row["omega_p"]) if row["omega_p"] else float(row["omega_ratio"]) * float(block.p)
     eta = float(row["eta"]) if row["eta"] else float(block.eta)
-    model = jr.RigidModel(block, eta=np.float64(eta))
+    model = jr.RigidModel(block, eta=jnp.asarray(eta))
     return _jit_sim(model, jr.RickerPulse(a_p, w))
-
-
-_jit_sim = eqx.filter_jit(lambda m, e: jr.simulate(m, e))
 
 
 def test_batch_round_trip_and_resume(tmp_path):
@@ -229,3 +229,29 @@ def test_batch_parameter_for_wrong_model(tmp_path):
     scenes = _write(tmp_path / "s.csv", "height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,spring,3,2,0.5\n")
     r = invoke("batch", scenes, tmp_path / "r.csv")
     assert r.exit_code == 2 and "'eta'" in r.output and "rigid" in r.output
+
+
+# -- record spectrum, calibrate ------------------------------------------------------------------
+def test_record_spectrum_equals_library(tmp_path):
+    from jaxrock.spectra import record_overturning_scale
+
+    t = np.arange(0, 2.0, 0.02)
+    acc = 0.4 * np.sin(2 * np.pi * 1.0 * t) * np.exp(-t)  # [g]
+    rec_file = tmp_path / "pulse.txt"
+    rec_file.write_text("\n".join(f"{a:.4f} {b:.8f}" for a, b in zip(t, acc)) + "\n")
+    out = tmp_path / "rs"
+    r = invoke("record-spectrum", "--record", rec_file, "--heights", "1,4", "--scales", "0.5:8:4", "--refine", 3,
+               "--tan-alpha", 0.2, "--out", out, "--quiet")
+    assert r.exit_code == 0, r.output
+    rows = _read(tmp_path / "rs.csv")
+    ref = record_overturning_scale(jr.RigidModel(jr.Block.from_slenderness(1.0, 0.2)), jr.read_record(rec_file),
+                                   [1.0, 4.0], np.linspace(0.5, 8, 4), refine=3, progress=False)
+    np.testing.assert_allclose([float(x["least_scale"]) for x in rows], ref.scale)
+    assert (tmp_path / "rs.png").exists() and (tmp_path / "rs.nc").exists()
+
+
+def test_calibrate_bad_input_exits_2(tmp_path):
+    r = invoke("calibrate", "--tan-alphas", "0.1,1.5", "--out", tmp_path)
+    assert r.exit_code == 2 and "--tan-alphas" in r.output
+    r = invoke("record-spectrum", "--heights", "5,2", "--out", tmp_path / "x")
+    assert r.exit_code == 2 and "heights" in r.output
