@@ -13,7 +13,7 @@ if _os.environ.get("JAXROCK_X64", "1") != "0":
 
 from ._validate import JaxrockInputError
 from .geometry import G, Block
-from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
+from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse, StillGround
 
 __all__ = [
     "G",
@@ -22,6 +22,7 @@ __all__ = [
     "RickerPulse",
     "AntisymmetricRickerPulse",
     "Record",
+    "StillGround",
     "JaxrockInputError",
 ]
 
@@ -48,3 +49,7 @@ __all__ += ["el_centro", "read_at2", "read_record", "read_two_column"]
 from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, run_batch
 
 __all__ += ["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "run_batch"]
+
+from .batch import read_scenes, run_scenes
+
+__all__ += ["read_scenes", "run_scenes"]

@@ -119,6 +119,21 @@ def influence_x(n: int) -> Float[Array, " N"]:
     return r.at[1 + 3 * jnp.arange(n)].set(1.0)
 
 
+def ground_load(n: int, m) -> Float[Array, " N"]:
+    """Effective load vector `p` of a unit horizontal ground acceleration, f = −üg p.
+
+    In coordinates relative to the ground, the inertia of the whole column (base node included,
+    which moves with the ground) gives `p = M[free, all] · r_all`: the u_x rows of M times 1, plus
+    the consistent-mass coupling `m_e/6` between the base node and node 1, which `M r` on the
+    free DOFs alone misses. Without it the horizontal inertia force is `m − m_e/6` (its lever arm
+    ~2 % short at 4 elements, so the flexible model rocked less than the one-DOF model even at
+    E = 10¹⁴ Pa). Σ p_x = m: a rigid column feels `−m üg` in total and `−m üg h cosθ` about its base.
+    """
+    me = m / n
+    M_rows = mass_matrix(jnp.asarray(1.0), n, m, jnp.zeros(n + 1)) @ influence_x(n)
+    return M_rows.at[1].add(me / 6)
+
+
 def linear_stiffness(h, n: int, EA, EI):
     """Material stiffness at the undeformed configuration (Hessian of the strain energy)."""
     return jax.hessian(strain_energy)(jnp.zeros(n_dof(n)), h, n, EA, EI)

@@ -52,7 +52,7 @@ import optimistix as optx
 from jaxtyping import Array, Bool, Float, Int
 
 from ._validate import JaxrockInputError, check_range
-from .excitation import AbstractExcitation
+from .excitation import StillGround
 from .geometry import Block
 from .spring import DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17
 
@@ -60,45 +60,16 @@ from .spring import DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cb
 CALIBRATION_ANGLES: tuple[float, ...] = (0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
 
 
-class ExplicitIntegrator(eqx.Module):
-    """An explicit Runge–Kutta solve of a spring model's first-order equations, with the same
-    `solve` signature as `SpringIntegrator.solve`. For the one-DOF quasi-rigid SM, whose only stiff
-    part is the pre-yield branch of the spring (θs = 10⁻³ α: a period ~ 2π/(27 p) near θ = 0), an
-    explicit solver is several times cheaper than the default L-stable ESDIRK (measured: 0.1 s vs
-    0.66 s per calibration iteration of 13 α × 6 angles on 2 CPU cores). Not for flexible columns
-    (E = 10¹⁴ Pa is stiff: use `SpringIntegrator`).
-    """
-
-    rtol: float = eqx.field(static=True, default=1e-9)
-    atol: float = eqx.field(static=True, default=1e-9)
-    solver: str = eqx.field(static=True, default="tsit5")
-    max_steps: int = eqx.field(static=True, default=20_000)
-
-    def solve(self, model, excitation, y0, t0, t1, event=None, saveat=None, *, dtmax=None, throw=False):
-        mech = model.mechanics() if isinstance(model, SpringModel) else model
-        solver = {"tsit5": diffrax.Tsit5, "dopri5": diffrax.Dopri5, "dopri8": diffrax.Dopri8}[self.solver]()
-        ctrl = diffrax.PIDController(rtol=self.rtol, atol=self.atol * mech.atol_scale(), dtmax=dtmax)
-        return diffrax.diffeqsolve(
-            diffrax.ODETerm(lambda t, y, args: args[0].vector_field(t, y, args[1])),
-            solver,
-            jnp.asarray(t0, dtype=float),
-            t1,
-            1e-3 / mech.p_r,
-            y0,
-            args=(mech, excitation),
-            saveat=diffrax.SaveAt(t1=True) if saveat is None else saveat,
-            stepsize_controller=ctrl,
-            event=event,
-            max_steps=self.max_steps,
-            throw=throw,
-        )
-
-
 #: Tolerances of the free-rocking solves: r_eq² to ~1e-8, so that finite differences and the
 #: 1e-4 calibration target are far above the integration error. Quasi-rigid SM: explicit Tsit5;
 #: flexible columns: the spring model's own L-stable solver (`default_integrator`).
-CALIBRATION_INTEGRATOR = ExplicitIntegrator(rtol=1e-9, atol=1e-9)
-FLEXIBLE_CALIBRATION_INTEGRATOR = SpringIntegrator(rtol=1e-8, atol=1e-8, max_steps=100_000)
+# explicit Tsit5 for the one-DOF model: its only stiff part, the spring's pre-yield branch
+# (θs = 10⁻³ α: a period ~ 2π/(27 p) near θ = 0), is mild; measured 0.1 s vs 0.66 s per calibration
+# iteration of 13 α × 6 angles on 2 CPU cores against the L-stable Kvaerno5.
+CALIBRATION_INTEGRATOR = SpringIntegrator(rtol=1e-9, atol=1e-9, solver="tsit5")
+# flexible: Kvaerno5 + Newton at 1e-7 (below ~1e-7 the stage round-off of a stiff column's
+# accelerations exceeds the scaled velocity tolerance and the step control stalls, see SpringIntegrator)
+FLEXIBLE_CALIBRATION_INTEGRATOR = SpringIntegrator(rtol=1e-7, atol=1e-7, solver="kvaerno5", max_steps=100_000)
 
 
 def default_integrator(model_or_family):
@@ -109,36 +80,7 @@ FIG7_TAN_ALPHAS: tuple[float, ...] = (0.1, 0.2, 0.3)
 FIG7_CBARS: tuple[float, ...] = (0.02, 0.08, 0.18)
 
 
-# ----------------------------------------------------------------------------------------------
-# still ground
-# ----------------------------------------------------------------------------------------------
-class _StillGround(AbstractExcitation):
-    """üg ≡ 0 (free rocking). Private: the public pulses need a_p ≠ 0."""
-
-    def __call__(self, t):
-        return jnp.zeros_like(jnp.asarray(t, dtype=float))
-
-    @property
-    def t_start(self):
-        return jnp.zeros(())
-
-    @property
-    def t_end(self):
-        return jnp.zeros(())
-
-    @property
-    def max_step(self):
-        return jnp.asarray(jnp.inf)
-
-    @property
-    def step_ts(self):
-        return None
-
-    def next_exceedance(self, t, level):
-        return jnp.full_like(jnp.asarray(t, dtype=float), jnp.inf)
-
-
-_STILL = _StillGround()
+_STILL = StillGround()
 
 
 # ----------------------------------------------------------------------------------------------
@@ -170,7 +112,7 @@ def free_cycle(
     model: SpringModel,
     theta0_over_alpha,
     *,
-    integrator: SpringIntegrator | ExplicitIntegrator | None = None,
+    integrator: SpringIntegrator | None = None,
     max_periods: float = 3.0,
 ) -> FreeCycle:
     """Free rocking of `model` from θ₀ = (θ₀/α′)·α′, θ̇ = 0, no excitation, to the next peak on the
@@ -225,7 +167,7 @@ def free_cycle(
     return FreeCycle(theta0=theta0, theta1=theta1, t_peak=t_peak, r2=r2, found=found)
 
 
-def energy_ratio(model: SpringModel, theta0_over_alpha, *, integrator: SpringIntegrator | ExplicitIntegrator | None = None):
+def energy_ratio(model: SpringModel, theta0_over_alpha, *, integrator: SpringIntegrator | None = None):
     """r_eq² = E(θ₁)/E(θ₀) of one free-rocking cycle of `model` from θ₀/α′ (θ̇₀ = 0, still ground).
 
     Differentiable w.r.t. the model's leaves (c̄, block geometry, column), vmappable over
@@ -295,7 +237,7 @@ def energy_ratio_grid(
     theta0_over_alpha,
     *,
     family: SpringFamily | None = None,
-    integrator: SpringIntegrator | ExplicitIntegrator | None = None,
+    integrator: SpringIntegrator | None = None,
 ):
     """r_eq² on the grid tanα × c̄ × θ₀/α, shape (n_α, n_c̄, n_θ) (one vmapped, compiled call)."""
     family = SpringFamily() if family is None else family
@@ -362,7 +304,7 @@ def calibrate_cbar(
     *,
     theta0_over_alpha=CALIBRATION_ANGLES,
     family: SpringFamily | None = None,
-    integrator: SpringIntegrator | ExplicitIntegrator | None = None,
+    integrator: SpringIntegrator | None = None,
     cbar0: float = 0.05,
     learning_rate: float = 0.1,
     decay: float = 0.97,
@@ -686,7 +628,6 @@ def calibration_report(
 
 __all__ = [
     "CALIBRATION_ANGLES",
-    "ExplicitIntegrator",
     "CALIBRATION_INTEGRATOR",
     "FreeCycle",
     "free_cycle",

@@ -199,6 +199,32 @@ class AntisymmetricRickerPulse(AbstractRicker):
         return _ricker_anti(x)
 
 
+class StillGround(AbstractExcitation):
+    """üg ≡ 0: free vibration and free rocking (e.g. the calibration of c̄ from θ₀ at rest)."""
+
+    def __call__(self, t):
+        return jnp.zeros_like(jnp.asarray(t, dtype=float))
+
+    @property
+    def t_start(self):
+        return jnp.zeros(())
+
+    @property
+    def t_end(self):
+        return jnp.zeros(())
+
+    @property
+    def max_step(self):
+        return jnp.asarray(jnp.inf)
+
+    @property
+    def step_ts(self):
+        return None
+
+    def next_exceedance(self, t, level):
+        return jnp.full_like(jnp.asarray(t, dtype=float), jnp.inf)
+
+
 class Record(AbstractExcitation):
     """A sampled ground-motion record: uniform step `dt` [s], accelerations `acc` [m/s²] from t = 0,
     linear between samples and zero outside, multiplied by `scale` (an array leaf: vmap over it).

@@ -110,13 +110,17 @@ class Spectrum(eqx.Module):
 
 
 # -- batched runs ---------------------------------------------------------------------------------
-_PASS_ITERATIONS = 24
+# Loop iterations per pass: short first passes (most cells finish in a few iterations), then
+# longer ones for the few cells still running.
+_PASSES = (4, 8, 16, 32)
 
 
 def _bucket(n: int, batch: int) -> int:
-    """Pad sizes to a few fixed values so the compiled pass is reused (full batch, or 1/16 of it)."""
-    small = max(1, batch // 16)
-    return small if n <= small else batch
+    """Pad sizes to a few fixed values so the compiled pass is reused (batch, batch/4, batch/16, ...)."""
+    size = batch
+    while size // 4 >= max(n, 64):
+        size //= 4
+    return size
 
 
 @eqx.filter_jit
@@ -125,8 +129,8 @@ def _start(model, integ, exc):
 
 
 @eqx.filter_jit
-def _advance(model, integ, exc, carry):
-    return jax.vmap(lambda e, c: rigid.advance(model, e, integ, c, _PASS_ITERATIONS))(exc, carry)
+def _advance(model, integ, exc, carry, n):
+    return jax.vmap(lambda e, c: rigid.advance(model, e, integ, c, n))(exc, carry)
 
 
 @eqx.filter_jit
@@ -147,7 +151,7 @@ def _rigid_batch(model, excitations, integ) -> Solution:
     tree_np = lambda t: jax.tree_util.tree_map(np.array, t)
     carry = tree_np(_start(model, integ, excitations))
     exc_np = tree_np(excitations)
-    used = 0
+    used, n_pass = 0, _PASSES[0]
     while used < integ.max_iterations:
         todo = np.flatnonzero(~np.asarray(rigid.is_finished(carry)))
         if todo.size == 0:
@@ -158,14 +162,15 @@ def _rigid_batch(model, excitations, integ) -> Solution:
             padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
             sub_e = jax.tree_util.tree_map(lambda x: x[padded], exc_np)
             sub_c = jax.tree_util.tree_map(lambda x: x[padded], carry)
-            sub_c = tree_np(_advance(model, integ, sub_e, sub_c))
+            sub_c = tree_np(_advance(model, integ, sub_e, sub_c, jnp.asarray(n_pass)))
 
             def put(x, y):
                 x[idx] = y[: idx.size]
                 return x
 
             carry = jax.tree_util.tree_map(put, carry, sub_c)
-        used += _PASS_ITERATIONS
+        used += n_pass
+        n_pass = _PASSES[min(_PASSES.index(n_pass) + 1, len(_PASSES) - 1)]
     return _finish(model, integ, excitations, carry)
 
 
