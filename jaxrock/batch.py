@@ -69,11 +69,10 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import rigid
 from ._validate import JaxrockInputError, check_range
 from .excitation import AntisymmetricRickerPulse, Record, RickerPulse
 from .geometry import Block
-from .model import simulate
+from .spectra import run_batch
 from .results import STATUS_NAMES
 from .rigid import RigidModel
 
@@ -330,65 +329,9 @@ def _stack(objs):
     return eqx.combine(stacked, static)
 
 
-_PASS_ITERATIONS = 24
-
-
-@eqx.filter_jit
-def _rstart(model, integ, exc):
-    return eqx.filter_vmap(lambda m, e: rigid.start(m, e, integ))(model, exc)
-
-
-@eqx.filter_jit
-def _radvance(model, integ, exc, carry):
-    return eqx.filter_vmap(lambda m, e, c: rigid.advance(m, e, integ, c, _PASS_ITERATIONS))(model, exc, carry)
-
-
-@eqx.filter_jit
-def _rfinish(model, integ, exc, carry):
-    return eqx.filter_vmap(lambda m, e, c: rigid.finish(m, e, integ, c))(model, exc, carry)
-
-
-@eqx.filter_jit
-def _simulate_stacked(model, exc):
-    return eqx.filter_vmap(lambda m, e: simulate(m, e))(model, exc)
-
-
-def _rigid_stacked(model, exc, integ):
-    """Like `spectra._rigid_batch`, with the model stacked too: passes of a few loop iterations,
-    the lanes still running gathered (in sub-batches of n or n/16) between passes."""
-    n = jax.tree_util.tree_leaves(exc)[0].shape[0]
-    to_np = lambda t: jax.tree_util.tree_map(np.array, t)
-    carry = to_np(_rstart(model, integ, exc))
-    dyn_m, st_m = eqx.partition(model, eqx.is_array)
-    dyn_e, st_e = eqx.partition(exc, eqx.is_array)
-    dyn_m, dyn_e = to_np(dyn_m), to_np(dyn_e)
-    small = n // 16 if n >= 64 else n  # small batches: no compaction, one compiled shape
-    used = 0
-    while used < integ.max_iterations:
-        todo = np.flatnonzero(~np.asarray(rigid.is_finished(carry)))
-        if todo.size == 0:
-            break
-        size = small if todo.size <= small else n
-        for lo in range(0, todo.size, size):
-            idx = todo[lo : lo + size]
-            padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
-            take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
-            sub = to_np(_radvance(eqx.combine(take(dyn_m), st_m), integ, eqx.combine(take(dyn_e), st_e), take(carry)))
-
-            def put(x, y):
-                x[idx] = y[: idx.size]
-                return x
-
-            carry = jax.tree_util.tree_map(put, carry, sub)
-        used += _PASS_ITERATIONS
-    return _rfinish(model, integ, exc, carry)
-
-
 def run_stacked(model, exc):
     """Summaries of a stacked batch (every array leaf of `model` and `exc` has the batch axis)."""
-    if isinstance(model, RigidModel):
-        return _rigid_stacked(model, exc, model.default_integrator())
-    return _simulate_stacked(model, exc)
+    return run_batch(model, exc, model_batched=True)
 
 
 def _fmt(x) -> str:

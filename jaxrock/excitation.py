@@ -21,7 +21,6 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ._validate import JaxrockInputError, check_positive, check_range, is_concrete
-from .geometry import G
 
 _BISECTIONS = 64
 

@@ -10,7 +10,6 @@ stopped.
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 
@@ -25,7 +24,7 @@ from ._validate import JaxrockInputError, check_grid
 from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
 from .geometry import G
 from .model import AbstractIntegrator, AbstractModel, simulate
-from .results import STATUS_NAMES, Solution, Status
+from .results import STATUS_NAMES, Solution
 
 PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}
 
@@ -123,34 +122,41 @@ def _bucket(n: int, batch: int) -> int:
     return size
 
 
-@eqx.filter_jit
-def _start(model, integ, exc):
-    return jax.vmap(lambda e: rigid.start(model, e, integ))(exc)
+def _vmap(fn, model_batched: bool):
+    """vmap over (model, excitation, *rest): the model too when it carries a batch axis."""
+    return eqx.filter_vmap(fn, in_axes=(eqx.if_array(0) if model_batched else None, eqx.if_array(0)))
 
 
 @eqx.filter_jit
-def _advance(model, integ, exc, carry, n):
-    return jax.vmap(lambda e, c: rigid.advance(model, e, integ, c, n))(exc, carry)
+def _start(model, integ, exc, model_batched):
+    return _vmap(lambda m, e: rigid.start(m, e, integ), model_batched)(model, exc)
 
 
 @eqx.filter_jit
-def _finish(model, integ, exc, carry):
-    return jax.vmap(lambda e, c: rigid.finish(model, e, integ, c))(exc, carry)
+def _advance(model, integ, exc, carry, n, model_batched):
+    return _vmap(lambda m, ec: rigid.advance(m, ec[0], integ, ec[1], n), model_batched)(model, (exc, carry))
 
 
 @eqx.filter_jit
-def _simulate_batch(model, integ, exc):
-    return jax.vmap(lambda e: simulate(model, e, integrator=integ))(exc)
+def _finish(model, integ, exc, carry, model_batched):
+    return _vmap(lambda m, ec: rigid.finish(m, ec[0], integ, ec[1]), model_batched)(model, (exc, carry))
 
 
-def _rigid_batch(model, excitations, integ) -> Solution:
-    """Run a batch of rigid scenes with compaction between passes (identical results to simulate)."""
+@eqx.filter_jit
+def _simulate_batch(model, integ, exc, model_batched):
+    return _vmap(lambda m, e: simulate(m, e, integrator=integ), model_batched)(model, exc)
+
+
+def _rigid_batch(model, excitations, integ, model_batched: bool) -> Solution:
+    """Run a batch of rigid scenes with compaction between passes (the same results as simulate)."""
     n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
-    # The carry lives on the host between passes: gathers and scatters of changing sizes in numpy
-    # cost nothing, where in JAX each new size would compile.
+    # The carry (and the batched inputs) live on the host between passes: gathers and scatters of
+    # changing sizes in numpy cost nothing, where in JAX each new size would compile.
     tree_np = lambda t: jax.tree_util.tree_map(np.array, t)
-    carry = tree_np(_start(model, integ, excitations))
-    exc_np = tree_np(excitations)
+    dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
+    dyn_m, static_m = eqx.partition(model, eqx.is_array)
+    dyn_e, dyn_m = tree_np(dyn_e), tree_np(dyn_m)
+    carry = tree_np(_start(model, integ, excitations, model_batched))
     used, n_pass = 0, _PASSES[0]
     while used < integ.max_iterations:
         todo = np.flatnonzero(~np.asarray(rigid.is_finished(carry)))
@@ -160,9 +166,10 @@ def _rigid_batch(model, excitations, integ) -> Solution:
         for lo in range(0, todo.size, size):
             idx = todo[lo : lo + size]
             padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
-            sub_e = jax.tree_util.tree_map(lambda x: x[padded], exc_np)
-            sub_c = jax.tree_util.tree_map(lambda x: x[padded], carry)
-            sub_c = tree_np(_advance(model, integ, sub_e, sub_c, jnp.asarray(n_pass)))
+            take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
+            sub_m = eqx.combine(take(dyn_m), static_m) if model_batched else model
+            sub_e = eqx.combine(take(dyn_e), static_e)
+            sub_c = tree_np(_advance(sub_m, integ, sub_e, take(carry), jnp.asarray(n_pass), model_batched))
 
             def put(x, y):
                 x[idx] = y[: idx.size]
@@ -171,15 +178,22 @@ def _rigid_batch(model, excitations, integ) -> Solution:
             carry = jax.tree_util.tree_map(put, carry, sub_c)
         used += n_pass
         n_pass = _PASSES[min(_PASSES.index(n_pass) + 1, len(_PASSES) - 1)]
-    return _finish(model, integ, excitations, carry)
+    return _finish(model, integ, excitations, carry, model_batched)
 
 
-def run_batch(model: AbstractModel, excitations: AbstractExcitation, integrator: AbstractIntegrator | None = None) -> Solution:
-    """Summaries of a batch of scenes (`excitations` has a leading batch axis on every array leaf)."""
+def run_batch(
+    model: AbstractModel,
+    excitations: AbstractExcitation,
+    integrator: AbstractIntegrator | None = None,
+    *,
+    model_batched: bool = False,
+) -> Solution:
+    """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
+    and so does `model` when `model_batched` (one model per scene; else one model for all)."""
     integ = model.default_integrator() if integrator is None else integrator
     if isinstance(model, rigid.RigidModel):
-        return _rigid_batch(model, excitations, integ)
-    return _simulate_batch(model, integ, excitations)
+        return _rigid_batch(model, excitations, integ, model_batched)
+    return _simulate_batch(model, integ, excitations, model_batched)
 
 
 def _pulse_class(pulse):
