@@ -32,7 +32,7 @@ Model (ndm = 2, ndf = 3), SI units, unit out-of-plane thickness, conventions of 
   `Path` series sampled at dt/4 (Ricker pulse over ω_p t ∈ [−8, 8], |üg(±8)| = 7e-6 a_p) —
   see `ground_motion_pattern` for why not `UniformExcitation`;
 - time stepping: `Newmark` γ = 1/2, β = 1/4 (trapezoidal, no numerical damping), `Newton` with a
-  `NormDispIncr` test (1e-10 relative to α′, max 30 iterations), `ProfileSPD`→`BandGeneral`,
+  `NormDispIncr` test (1e-10 α′, max 30 iterations), `BandGeneral`,
   dt = min(T_p, 2π/p′)/`steps_per_period` (default 400, i.e. dt ≤ T_p/400); a failed step is
   retried as 2, 4, … 64 substeps (`NewtonLineSearch` on the smallest ones);
 - stop rule (as jaxrock's): overturned when |θ| ≥ α′; after the pulse, stop once the rigid

@@ -87,6 +87,12 @@ class AbstractRicker(AbstractExcitation):
     def shape(x):
         """Normalised wavelet f(x), x = ω_p t, with max |f| = 1."""
 
+    def __check_init__(self):
+        check_range("a_p (pulse amplitude) [m/s^2]", self.a_p, -math.inf, math.inf)
+        if is_concrete(self.a_p) and np.any(np.asarray(self.a_p) == 0):
+            raise JaxrockInputError("a_p = 0: the pulse amplitude must be non-zero (any sign)")
+        check_positive("omega_p (pulse frequency) [rad/s]", self.omega_p)
+
     def __call__(self, t):
         return self.a_p * self.shape(self.omega_p * t)
 
@@ -155,25 +161,17 @@ _S6, _S2 = math.sqrt(6.0), math.sqrt(2.0)
 _A1, _A2 = math.sqrt(9 - math.sqrt(54)), math.sqrt(9 + math.sqrt(54))  # extrema of eq. 29
 
 
-def _check_pulse(a_p, omega_p):
-    check_range("a_p (pulse amplitude) [m/s^2]", a_p, -math.inf, math.inf)
-    if is_concrete(a_p) and np.any(np.asarray(a_p) == 0):
-        raise JaxrockInputError("a_p = 0: the pulse amplitude must be non-zero (any sign)")
-    check_positive("omega_p (pulse frequency) [rad/s]", omega_p)
+def _as_float(x):
+    return jnp.asarray(x, dtype=float)
 
 
 class RickerPulse(AbstractRicker):
     """Symmetric Ricker pulse üg(t) = a_p (1 − ω_p² t²/2) exp(−ω_p² t²/4) (SPEC)."""
 
-    a_p: Float[Array, ""]
-    omega_p: Float[Array, ""]
+    a_p: Float[Array, ""] = eqx.field(converter=_as_float)
+    omega_p: Float[Array, ""] = eqx.field(converter=_as_float)
     _breaks: ClassVar = (-12.0, -_S6, -_S2, 0.0, _S2, _S6, 12.0)
     _x_cut: ClassVar = 12.0  # |f(±12)| = 1.7e-14
-
-    def __init__(self, a_p, omega_p):
-        _check_pulse(a_p, omega_p)
-        self.a_p = jnp.asarray(a_p, dtype=float)
-        self.omega_p = jnp.asarray(omega_p, dtype=float)
 
     @staticmethod
     def shape(x):
@@ -183,15 +181,10 @@ class RickerPulse(AbstractRicker):
 class AntisymmetricRickerPulse(AbstractRicker):
     """Antisymmetric Ricker pulse, eq. 29: üg = (a_p/β)(ω_p²t²/3 − 3)(ω_p t/√3) exp(−ω_p²t²/6), β = 1.3801."""
 
-    a_p: Float[Array, ""]
-    omega_p: Float[Array, ""]
+    a_p: Float[Array, ""] = eqx.field(converter=_as_float)
+    omega_p: Float[Array, ""] = eqx.field(converter=_as_float)
     _breaks: ClassVar = (-15.0, -_A2, -3.0, -_A1, 0.0, _A1, 3.0, _A2, 15.0)
     _x_cut: ClassVar = 15.0  # |f(±15)| = 2.4e-14
-
-    def __init__(self, a_p, omega_p):
-        _check_pulse(a_p, omega_p)
-        self.a_p = jnp.asarray(a_p, dtype=float)
-        self.omega_p = jnp.asarray(omega_p, dtype=float)
 
     @staticmethod
     def shape(x):
