@@ -53,3 +53,22 @@ __all__ += ["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overtu
 from .batch import read_scenes, run_scenes
 
 __all__ += ["read_scenes", "run_scenes"]
+
+from .spring import DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17, first_period_eq21, pushover_eq9
+from .calibration import CalibrationResult, calibrate_cbar, calibration_report, energy_ratio, fit_power_law, rm_target
+
+__all__ += [
+    "SpringModel",
+    "Column",
+    "SpringIntegrator",
+    "DEFAULT_SMOOTHING",
+    "cbar_eq17",
+    "first_period_eq21",
+    "pushover_eq9",
+    "energy_ratio",
+    "calibrate_cbar",
+    "CalibrationResult",
+    "fit_power_law",
+    "calibration_report",
+    "rm_target",
+]
