@@ -330,6 +330,8 @@ def record_overturning_scale(
     The body keeps the template's slenderness (and base slenderness); only its size changes.
     The factor sweep `scales` is run vmapped for each height; the first overturning factor is then
     refined by `refine` bisections against the largest smaller factor that does not overturn.
+    Overturning is not monotone in the factor: an overturning window narrower than the sweep's
+    step, below the first overturning factor found, is missed — refine the sweep to rule it out.
     """
     hs = check_grid("heights (2h) [m]", heights)
     sc = check_grid("scales (record factors)", scales)

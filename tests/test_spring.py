@@ -247,37 +247,66 @@ def test_energy_balance_flexible():
     np.testing.assert_allclose(H["w_top"], H["u_top"] - 2 * blk.h * jnp.sin(H["theta"]), atol=1e-12)
 
 
-@pytest.mark.slow
-@pytest.mark.xfail(reason="KNOWN OPEN: the E = 1e14 FE column stalls the ESDIRK step control at rtol <= 1e-5 "
-                   "(max_steps) and gives 0.637 vs 0.669 at 1e-4; see report", strict=False)
 def test_flexible_E1e14_converges_to_quasi_rigid():
+    """Paper section 3: the FE column with E = 10¹⁴ Pa is the quasi-rigid SM.
+
+    Measured (tanα = 0.2, 2h = 10 m, a_p = 4 g tanα, ω_p = 2π, 4 elements, Kvaerno5 + Newton):
+    one-DOF 0.663037 (Kvaerno5 1e-10); FE 0.663801 at 1e-5, 0.663042 at 1e-6 (default). Two bugs
+    were behind the former 0.637 and the stall: the ground load missed the base-node coupling of
+    the consistent mass (`beam.ground_load`: −m_e/6 üg at node 1, 2 % of the overturning moment),
+    and Newton's residual test could not pass the round-off of the stiff column's accelerations.
+    Tolerance 1e-4: the FE column has a bending/axial compliance ~1e-10 of the spring's, so what
+    remains is the solver tolerance (5e-6 measured at 1e-6, 8e-4 at 1e-5).
+    """
     blk = Block.from_slenderness(10.0, 0.2)
     ex = RickerPulse(4 * G * 0.2, 2 * math.pi)
     qr = float(_max(SpringModel(blk), ex))
+    assert qr == pytest.approx(0.663037, abs=2e-5)
     s = _sim(SpringModel(blk, Column(1e14, 2500.0), n_elements=4), ex)
     assert s.status == Status.ok
-    # residual difference: the FE column has a 0.2 % rotary-inertia-free translational mass
-    # and an axial/bending compliance of 1e-10; the rest is tolerance
-    assert float(s.max_theta) == pytest.approx(qr, abs=2e-3)
+    assert float(s.max_theta) == pytest.approx(qr, abs=1e-4)
 
 
-@pytest.mark.slow
-def test_figure13_reversal():
-    """2h = 50 m, 2b = 5 m concrete (ζ = 0.01) vs rigid, paper figure 13."""
+def test_stiff_column_too_tight_tolerance_reports_max_steps():
+    """Below the round-off floor (E = 10¹⁴ Pa at 1e-8) the run stops with a status that says why,
+    not with NaN or a silently wrong peak."""
+    blk = Block.from_slenderness(10.0, 0.2)
+    model = SpringModel(blk, Column(1e14, 2500.0), n_elements=4)
+    integ = SpringIntegrator(rtol=1e-8, atol=1e-8, solver="kvaerno5", max_steps=2000)
+    s = simulate(model, RickerPulse(4 * G * 0.2, 2 * math.pi), integrator=integ)
+    assert s.status in (Status.ok, Status.max_steps)
+    if s.status == Status.ok:
+        assert float(s.max_theta) == pytest.approx(0.663037, abs=1e-4)
+
+
+def test_figure13_flexibility_reversal():
+    """2h = 50 m, 2b = 5 m concrete column (ζ = 0.01, 10 elements), paper figure 13, against the
+    quasi-rigid SM and Housner's RM (`jaxrock.RigidModel`).
+
+    (ω_p/p, a_p/(g tanα)) = (3, 2.6): reproduced — the flexible column overturns, the rigid ones
+    keep rocking (measured: quasi-rigid SM 0.774, RM 0.753).
+    (6, 5.85): the flexible column survives (0.766) and is clearly more stable than the rigid ones,
+    as in the paper, but our rigid models do *not* overturn: quasi-rigid SM 0.972, RM 0.929. The
+    scene lies just below the rigid overturning boundary, where max θ/α jumps from ~0.95 to 1 under a
+    few % change of a_p; the paper's figure-13 rigid overturning is within that margin (pulse
+    normalisation, η, plotting resolution of its spectra), so we assert the reversal's
+    robust part: flexible < 0.8, rigid > 0.9.
+    """
     blk = Block.from_size(50.0, 5.0)
-    p = float(blk.p)
+    p, ta = float(blk.p), float(blk.tan_alpha)
     res = {}
     for wr, ar in [(3, 2.6), (6, 5.85)]:
-        ex = RickerPulse(ar * G * 0.1, wr * p)
+        ex = RickerPulse(ar * G * ta, wr * p)
         flex = _sim(SpringModel(blk, Column.concrete()), ex)
-        rig = _sim(SpringModel(blk), ex)
-        rm = rm_max_theta(50.0, 0.1, ar * G * 0.1, wr * p)
-        res[(wr, ar)] = (float(flex.max_theta), float(rig.max_theta), rm)
         assert flex.status == Status.ok
-    print(res)
-    assert res[(3, 2.6)][0] == 1.0 and res[(3, 2.6)][1] < 1.0  # flexible overturns, rigid rocks
-    assert res[(6, 5.85)][0] < 1.0  # flexible survives
-    assert res[(6, 5.85)][0] < res[(6, 5.85)][1]  # and is more stable than the rigid SM
+        res[wr] = (flex, _sim(SpringModel(blk), ex), _sim(jaxrock.RigidModel(blk), ex))
+    flex, qr, rm = res[3]
+    assert bool(flex.overturned) and float(flex.max_theta) == 1.0
+    assert not bool(qr.overturned) and float(qr.max_theta) == pytest.approx(0.774, abs=0.01)
+    assert not bool(rm.overturned) and float(rm.max_theta) == pytest.approx(0.753, abs=0.01)
+    flex, qr, rm = res[6]
+    assert not bool(flex.overturned) and float(flex.max_theta) < 0.8
+    assert float(qr.max_theta) > 0.9 and float(rm.max_theta) > 0.9
 
 
 @pytest.mark.parametrize(
