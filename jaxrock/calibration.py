@@ -10,7 +10,7 @@ paper's missing eq. 13). The paper fitted c̄ by hand ("based on the data in Fig
   (θ̇(0) = 0, still ground) from θ₀ to the next peak θ₁ *on the same side* (θ₀ → opposite peak →
   θ₁). ``E`` is the model's own potential at zero velocity, `SpringModel.static_potential`
   (``My θs log cosh(θ/θs) − m g h (1 − cosθ)``, → SPEC's ``m g R (sinα|θ| − cosα(1 − cosθ))`` as
-  θs → 0; at the default θs = 10⁻³α′ the two ratios differ by < 5·10⁻⁴, and only the model's own
+  θs → 0; at the default θs = 10⁻⁴α′ (`DEFAULT_SMOOTHING`) the two ratios differ by < 5·10⁻⁴, and only the model's own
   energy gives exactly r_eq² = 1 without damping).
   The peak is located exactly: a `diffrax.Event` on the base velocity, ``s θ̇`` crossing zero
   downwards (s = sign θ₀), gated to the same side (``s θ > 0``) and to times after half the rigid
@@ -26,7 +26,7 @@ paper's missing eq. 13). The paper fitted c̄ by hand ("based on the data in Fig
 - `calibration_report(out_dir)`: the table (CSV), figure 7 and the calibration plot (PNG); what
   the CLI command ``jaxrock calibrate`` prints.
 
-Findings (default quasi-rigid SM with added masses, θs = 10⁻³ α, angles 0.5, 0.6, …, 0.9, 0.95):
+Findings (default quasi-rigid SM with added masses, θs = 10⁻⁴ α, angles 0.5, 0.6, …, 0.9, 0.95):
 the calibrated c̄ is 0.0203, 0.0881, 0.2192 at tanα = 0.1, 0.2, 0.3 against eq. 17's 0.0199,
 0.0779, 0.1699 (+2 %, +13 %, +29 %); the power-law fit over tanα ∈ [0.05, 0.35] gives
 k = 0.0208 ± 0.0004, n = 2.18 ± 0.02 rather than 0.02, 2. r_eq² depends on θ₀/α
@@ -64,7 +64,7 @@ CALIBRATION_ANGLES: tuple[float, ...] = (0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
 #: 1e-4 calibration target are far above the integration error. Quasi-rigid SM: explicit Tsit5;
 #: flexible columns: the spring model's own L-stable solver (`default_integrator`).
 # explicit Tsit5 for the one-DOF model: its only stiff part, the spring's pre-yield branch
-# (θs = 10⁻³ α: a period ~ 2π/(27 p) near θ = 0), is mild; measured 0.1 s vs 0.66 s per calibration
+# (θs = 10⁻⁴ α: a short pre-yield period near θ = 0), is mild; measured 0.1 s vs 0.66 s per calibration
 # iteration of 13 α × 6 angles on 2 CPU cores against the L-stable Kvaerno5.
 CALIBRATION_INTEGRATOR = SpringIntegrator(rtol=1e-9, atol=1e-9, solver="tsit5")
 # flexible: Kvaerno5 + Newton at 1e-7 (below ~1e-7 the stage round-off of a stiff column's
