@@ -53,11 +53,11 @@ from diffrax import with_stepsize_controller_tols
 from jaxtyping import Array, Float
 
 from . import beam
-from ._validate import JaxrockInputError, check_nonnegative, check_positive, check_range, is_concrete
+from ._validate import JaxrockInputError, check_nonnegative, check_positive, check_range
 from .excitation import AbstractExcitation
 from .geometry import G, Block
 from .model import AbstractIntegrator, AbstractModel
-from .results import Save, Solution, Status
+from .results import Solution, Status
 
 # θs/α′ default from the work–precision study (16 quasi-rigid pulse scenes, tanα = 0.2, error of
 # max|θ|/α vs θs/α = 1e-5): 1e-2 → 9.4e-2, 3e-3 → 6.2e-2, 1e-3 → 3.5e-2, 3e-4 → 1.6e-2,

@@ -15,7 +15,6 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
-from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq
 
 import jaxrock as jr
