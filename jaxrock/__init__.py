@@ -46,9 +46,9 @@ from .records import el_centro, read_at2, read_record, read_two_column
 
 __all__ += ["el_centro", "read_at2", "read_record", "read_two_column"]
 
-from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, run_batch
+from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, refine_boundaries, run_batch
 
-__all__ += ["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "run_batch"]
+__all__ += ["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch"]
 
 from .batch import read_scenes, run_scenes
 

@@ -14,6 +14,7 @@ from enum import Enum
 from pathlib import Path
 from typing import Optional
 
+import equinox as eqx
 import numpy as np
 import typer
 
@@ -193,6 +194,7 @@ def spectrum(
     undamped: bool = typer.Option(False, "--undamped", help="no energy loss: η = 1 (rigid) or c̄ = 0 (spring)"),
     checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in <out>.checkpoint.npz; a rerun resumes"),
     batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into equal batches"),
+    refine: int = typer.Option(10, min=0, max=40, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
     """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
@@ -205,10 +207,9 @@ def spectrum(
     ck = Path(f"{out}.checkpoint.npz") if checkpoint else None
     t0 = time.perf_counter()
     bs = even_batch(wr.size * ar.size, batch_size)
-    spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, batch_size=bs, progress=not quiet, checkpoint=ck)
+    spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, batch_size=bs, progress=not quiet, checkpoint=ck, refine=refine)
     seconds = time.perf_counter() - t0
-    spec = type(spec)(**{**{f: getattr(spec, f) for f in ("omega_ratio", "accel_ratio", "max_theta", "overturned", "uplifted", "status")},
-                         "attrs": {**spec.attrs, "model_kind": model.value, "undamped": int(undamped)}})
+    spec = eqx.tree_at(lambda s: s.attrs, spec, {**spec.attrs, "model_kind": model.value, "undamped": int(undamped)})
     nc = spec.save(Path(f"{out}.nc"))
     from .plotting import plot_spectrum
 

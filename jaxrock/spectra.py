@@ -34,7 +34,8 @@ class Spectrum(eqx.Module):
 
     `max_theta[i, j]` is max |θ|/α′ at `accel_ratio[i]` = a_p/(g tanα′) and `omega_ratio[j]` =
     ω_p/p′ (the threshold value, 1 by default, where the body overturns).
-    `attrs` describes the scene (model, α′, p′, pulse, ...).
+    `attrs` describes the scene (model, α′, p′, pulse, ...). `uplift_line` and `overturn_line`,
+    when present, are the boundaries refined by bisection between grid rows (`refine_boundaries`).
     """
 
     omega_ratio: np.ndarray
@@ -44,6 +45,8 @@ class Spectrum(eqx.Module):
     uplifted: np.ndarray
     status: np.ndarray
     attrs: dict
+    uplift_line: np.ndarray | None = None
+    overturn_line: np.ndarray | None = None
 
     @property
     def ok(self) -> bool:
@@ -56,13 +59,15 @@ class Spectrum(eqx.Module):
 
     @property
     def uplift_boundary(self) -> np.ndarray:
-        """Least a_p/(g tanα′) of the grid that uplifts, per ω_p/p′ column (NaN: none in the grid)."""
-        return self._least(self.uplifted)
+        """Least a_p/(g tanα′) that uplifts, per ω_p/p′ column: refined if `uplift_line` is there,
+        else the least grid row (NaN: none in the grid)."""
+        return self._least(self.uplifted) if self.uplift_line is None else self.uplift_line
 
     @property
     def overturn_boundary(self) -> np.ndarray:
-        """Least a_p/(g tanα′) of the grid that overturns, per ω_p/p′ column (NaN: none in the grid)."""
-        return self._least(self.overturned)
+        """Least a_p/(g tanα′) that overturns, per ω_p/p′ column: refined if `overturn_line` is
+        there, else the least grid row (NaN: none in the grid)."""
+        return self._least(self.overturned) if self.overturn_line is None else self.overturn_line
 
     def to_xarray(self):
         import xarray as xr
@@ -81,7 +86,8 @@ class Spectrum(eqx.Module):
                 "omega_ratio": ("omega_ratio", self.omega_ratio, {"long_name": "omega_p/p", "units": "1"}),
                 "accel_ratio": ("accel_ratio", self.accel_ratio, {"long_name": "a_p/(g tan alpha)", "units": "1"}),
             },
-            attrs={k: (str(v) if not isinstance(v, (int, float, str)) else v) for k, v in self.attrs.items()},
+            attrs={**{k: (str(v) if not isinstance(v, (int, float, str)) else v) for k, v in self.attrs.items()},
+                   "refined": int(self.uplift_line is not None)},
         )
         return ds
 
@@ -104,7 +110,9 @@ class Spectrum(eqx.Module):
                 overturned=ds["overturned"].values.astype(bool),
                 uplifted=ds["uplifted"].values.astype(bool),
                 status=ds["status"].values.astype(np.int32),
-                attrs=dict(ds.attrs),
+                attrs={k: v for k, v in ds.attrs.items() if k != "refined"},
+                uplift_line=ds["uplift_boundary"].values.copy() if ds.attrs.get("refined") else None,
+                overturn_line=ds["overturn_boundary"].values.copy() if ds.attrs.get("refined") else None,
             )
 
 
@@ -214,6 +222,7 @@ def overturning_spectrum(
     batch_size: int = 4096,
     progress: bool = True,
     checkpoint: str | os.PathLike | None = None,
+    refine: int = 0,
 ) -> Spectrum:
     """max |θ|/α′ of `model` over the grid `accel_ratio` (a_p/(g tanα′)) × `omega_ratio` (ω_p/p′).
 
@@ -221,6 +230,7 @@ def overturning_spectrum(
     - `batch_size`: cells run together in one vmapped batch (memory bound).
     - `checkpoint`: a file (.npz) where finished batches are kept; rerunning the same call after an
       interruption resumes from it, and it is removed when the spectrum is complete.
+    - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
     """
     wr = check_grid("omega_ratio (omega_p/p)", omega_ratio)
     ar = check_grid("accel_ratio (a_p/(g tan alpha))", accel_ratio)
@@ -275,7 +285,7 @@ def overturning_spectrum(
         "height": float(block.height),
         "width": float(block.width),
     }
-    return Spectrum(
+    spec = Spectrum(
         omega_ratio=wr,
         accel_ratio=ar,
         max_theta=out["max_theta"].reshape(shape),
@@ -284,6 +294,49 @@ def overturning_spectrum(
         status=out["status"].reshape(shape),
         attrs=attrs,
     )
+    if int(refine) > 0:
+        spec = refine_boundaries(model, spec, pulse=pulse, iterations=int(refine), integrator=integrator)
+    return spec
+
+
+def refine_boundaries(
+    model: AbstractModel,
+    spectrum: Spectrum,
+    *,
+    pulse="symmetric",
+    iterations: int = 12,
+    integrator: AbstractIntegrator | None = None,
+) -> Spectrum:
+    """The spectrum with its uplift and overturning lines refined by bisection.
+
+    In each ω_p/p′ column the bracket is the first grid row that uplifts (overturns) and the row
+    below it; `iterations` bisections of a_p, all columns in one vmapped batch per step, shrink
+    it by 2^-iterations. A column whose first grid row already uplifts (overturns) keeps the grid
+    value; one with none stays NaN. Overturning is not monotone in a_p: the line found is the
+    least a_p within the bracket, not below it.
+    """
+    cls = _pulse_class(pulse)
+    block = model.block
+    p, tan_a = float(block.p_r), float(jnp.tan(block.alpha_r))
+    ar, wr = spectrum.accel_ratio, spectrum.omega_ratio
+    lines = []
+    for mask, flag in ((spectrum.uplifted, "uplifted"), (spectrum.overturned, "overturned")):
+        first = np.argmax(mask, axis=0)
+        has = mask.any(axis=0)
+        line = np.where(has, ar[first], np.nan)
+        todo = has & (first > 0)
+        lo = np.where(todo, ar[np.maximum(first - 1, 0)], 0.0)
+        hi = line.copy()
+        if todo.any():
+            for _ in range(int(iterations)):
+                mid = np.where(todo, 0.5 * (lo + hi), ar[0])
+                exc = jax.vmap(cls)(jnp.asarray(mid * G * tan_a), jnp.asarray(wr * p))
+                yes = np.asarray(getattr(run_batch(model, exc, integrator), flag))
+                hi = np.where(todo & yes, mid, hi)
+                lo = np.where(todo & ~yes, mid, lo)
+            line = np.where(todo, hi, line)
+        lines.append(line)
+    return eqx.tree_at(lambda s: (s.uplift_line, s.overturn_line), spectrum, tuple(lines), is_leaf=lambda x: x is None)
 
 
 # -- record spectra (paper figure 10) ---------------------------------------------------------------

@@ -1,0 +1,91 @@
+"""Overturning spectra: physics of the boundary lines, agreement with single runs, storage, and
+resuming an interrupted run without recomputing finished batches."""
+
+import numpy as np
+import pytest
+
+import jaxrock as jr
+from jaxrock import JaxrockInputError, spectra
+
+W = np.linspace(1.0, 15.0, 6)
+A = np.linspace(0.5, 10.0, 6)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
+
+
+@pytest.mark.parametrize("pulse,peak", [("symmetric", 1.0), ("antisymmetric", 1.0)])
+def test_refined_uplift_line_is_g_tan_alpha_over_the_pulse_peak(model, pulse, peak):
+    """A rigid block uplifts iff max|üg| > g tanα: the least a_p/(g tanα) is 1/max|f| = 1 for both
+    Ricker pulses (eq. 29's β makes the antisymmetric peak a_p), whatever ω_p."""
+    n = 14
+    s = jr.overturning_spectrum(model, W, A, pulse=pulse, progress=False, refine=n)
+    width = (A[1] - A[0]) / 2**n  # the bracket after n bisections
+    assert np.all(s.uplift_line >= 1.0 / peak) and np.all(s.uplift_line <= 1.0 / peak + width)
+    # the refined overturning line lies inside its grid bracket
+    grid = s._least(s.overturned)
+    has = np.isfinite(grid) & (grid > A[0])
+    assert np.all(s.overturn_line[has] <= grid[has]) and np.all(s.overturn_line[has] > grid[has] - (A[1] - A[0]))
+
+
+def test_spectrum_cells_equal_single_runs(model):
+    s = jr.overturning_spectrum(model, W[:3], A[2:5], progress=False)
+    p, tan_a = float(model.block.p_r), float(model.block.tan_alpha)
+    for i, a in enumerate(A[2:5]):
+        for j, w in enumerate(W[:3]):
+            one = jr.simulate(model, jr.RickerPulse(a * jr.G * tan_a, w * p))
+            assert bool(one.overturned) == bool(s.overturned[i, j])
+            assert abs(float(one.max_theta) - s.max_theta[i, j]) < 1e-8
+
+
+def test_save_and_load_round_trip(model, tmp_path):
+    s = jr.overturning_spectrum(model, W, A, progress=False, refine=4)
+    r = jr.Spectrum.load(s.save(tmp_path / "s.nc"))
+    for f in ("omega_ratio", "accel_ratio", "max_theta", "overturned", "uplifted", "status"):
+        assert np.array_equal(getattr(r, f), getattr(s, f)), f
+    assert np.array_equal(r.uplift_boundary, s.uplift_boundary, equal_nan=True)
+    assert np.array_equal(r.overturn_boundary, s.overturn_boundary, equal_nan=True)
+    assert r.attrs["model"] == "RigidModel"
+
+
+class _Killed(Exception):
+    """Stands for the process being killed mid-run (pytest reserves KeyboardInterrupt)."""
+
+
+def test_interrupted_run_resumes_without_recomputing_finished_batches(model, tmp_path, monkeypatch):
+    ck = tmp_path / "spec.checkpoint.npz"
+    full = jr.overturning_spectrum(model, W, A, progress=False, batch_size=12)
+    calls, killed = [], []
+    real = spectra.run_batch
+
+    def dies_on_second_batch(*args, **kw):
+        calls.append(1)
+        if len(calls) == 2 and not killed:
+            killed.append(1)
+            raise _Killed
+        return real(*args, **kw)
+
+    monkeypatch.setattr(spectra, "run_batch", dies_on_second_batch)
+    with pytest.raises(_Killed):
+        jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck)
+    assert ck.exists()
+    calls.clear()
+    resumed = jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck)
+    assert len(calls) == 36 // 12 - 1  # the first batch came from the checkpoint
+    assert np.array_equal(resumed.max_theta, full.max_theta) and not ck.exists()
+
+
+@pytest.mark.parametrize(
+    "omega,accel,needle",
+    [([], A, "omega_ratio"), (W[::-1], A, "increasing"), (W, [0.5, np.nan], "accel_ratio"), (W, [-1.0, 2.0], "accel_ratio")],
+)
+def test_bad_grids_are_rejected_before_running(model, omega, accel, needle):
+    with pytest.raises(JaxrockInputError, match=needle):
+        jr.overturning_spectrum(model, omega, accel, progress=False)
+
+
+def test_unknown_pulse_is_rejected(model):
+    with pytest.raises(JaxrockInputError, match="pulse"):
+        jr.overturning_spectrum(model, W, A, pulse="square", progress=False)
