@@ -70,14 +70,13 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ._validate import JaxrockInputError, check_range
-from .excitation import AntisymmetricRickerPulse, Record, RickerPulse
+from .excitation import Record
 from .geometry import Block
-from .spectra import run_batch
+from .spectra import PULSES, run_batch
 from .results import STATUS_NAMES
 from .rigid import RigidModel
 
 MODELS = ("rigid", "spring", "spring-flexible")
-PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}
 BUILTIN_RECORDS = ("elcentro",)
 INPUT_COLUMNS = (
     "height",
@@ -188,6 +187,20 @@ def _resolve_record(text: str, base: Path, row: _Row, cache: dict) -> Record:
     return cache[path]
 
 
+def scene_model(kind: str, block: Block, *, eta=None, cbar=None, E=None, rho=None, zeta=None):
+    """The model of one scene (`kind` in `MODELS`; None means the default): shared by the batch
+    rows and the CLI. A rigid model always carries its η as an array (the block's η′ by default),
+    so that rows with and without `eta` share one batch."""
+    if kind == "rigid":
+        return RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
+    from .spring import Column, SpringModel
+
+    if kind == "spring":
+        return SpringModel(block, None, cbar=cbar)
+    column = Column(30e9 if E is None else E, 2500.0 if rho is None else rho)  # concrete (sections 4–6)
+    return SpringModel(block, column, cbar=cbar, zeta=0.01 if zeta is None else zeta)
+
+
 def _check_row(row: _Row, base: Path, cache: dict) -> tuple[object, object, str]:
     kind = (row.text("model", "rigid")).lower()
     if kind not in MODELS:
@@ -216,21 +229,15 @@ def _check_row(row: _Row, base: Path, cache: dict) -> tuple[object, object, str]
         row.fail(None, str(e))
 
     try:
-        if kind == "rigid":
-            eta = row.num("eta", 0.0, 1.0)
-            # the default η′ given explicitly: rows with and without `eta` share one batch
-            model = RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
-        else:
-            from .spring import Column, SpringModel
-
-            cbar = row.num("cbar", 0.0, math.inf, hi_open=True)
-            if kind == "spring":
-                model = SpringModel(block, None, cbar=cbar)
-            else:
-                E = row.num("e", 0.0, math.inf, lo_open=True, hi_open=True, default=30e9)
-                rho = row.num("rho", 0.0, math.inf, lo_open=True, hi_open=True, default=2500.0)
-                zeta = row.num("zeta", 0.0, math.inf, hi_open=True, default=0.01)
-                model = SpringModel(block, Column(E, rho), cbar=cbar, zeta=zeta)
+        model = scene_model(
+            kind,
+            block,
+            eta=row.num("eta", 0.0, 1.0),
+            cbar=row.num("cbar", 0.0, math.inf, hi_open=True),
+            E=row.num("e", 0.0, math.inf, lo_open=True, hi_open=True),
+            rho=row.num("rho", 0.0, math.inf, lo_open=True, hi_open=True),
+            zeta=row.num("zeta", 0.0, math.inf, hi_open=True),
+        )
     except JaxrockInputError as e:
         row.fail(None, str(e))
 

@@ -98,13 +98,11 @@ def parse_values(name: str, text: str) -> np.ndarray:
 
 def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alpha_base=None, *, undamped=False,
                 eta=None, cbar=None, E=None, rho=None, zeta=None):
-    """The model of a CLI scene. The spring wiring is deliberately thin: `SpringModel(block, column,
-    cbar=...)` with its defaults (quasi-rigid with added masses for `spring`)."""
-    import jax.numpy as jnp
-
+    """The model of a CLI scene: the flags are checked here, the model is built by
+    `batch.scene_model` (the same as a batch row)."""
     from ._validate import JaxrockInputError
+    from .batch import scene_model
     from .geometry import Block
-    from .rigid import RigidModel
 
     kind = ModelKind(model)
     block = Block.from_slenderness(height, tan_alpha, tan_alpha_base)
@@ -117,19 +115,12 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
             raise JaxrockInputError("--cbar applies to the spring models only (rigid: --eta or --undamped)")
         if undamped and eta is not None:
             raise JaxrockInputError("give --undamped or --eta, not both")
-        e = 1.0 if undamped else eta
-        return RigidModel(block, eta=None if e is None else jnp.asarray(e, dtype=float))
-    from .spring import Column, SpringModel
-
+        return scene_model("rigid", block, eta=1.0 if undamped else eta)
     if eta is not None:
         raise JaxrockInputError("--eta applies to the rigid model only (spring: --cbar or --undamped)")
     if undamped and cbar is not None:
         raise JaxrockInputError("give --undamped or --cbar, not both")
-    c = 0.0 if undamped else cbar
-    if kind is ModelKind.spring_flexible:  # concrete by default (paper sections 4-6)
-        column = Column(30e9 if E is None else E, 2500.0 if rho is None else rho)
-        return SpringModel(block, column, cbar=c, zeta=0.01 if zeta is None else zeta)
-    return SpringModel(block, None, cbar=c)
+    return scene_model(kind.value, block, cbar=0.0 if undamped else cbar, E=E, rho=rho, zeta=zeta)
 
 
 def even_batch(n: int, limit: int) -> int:
