@@ -55,8 +55,11 @@ from jaxtyping import Array, Float
 from . import beam
 from ._validate import JaxrockInputError, check_nonnegative, check_positive, check_range
 from .excitation import AbstractExcitation
+from .generalized_alpha import GeneralizedAlpha
 from .geometry import G, Block
 from .model import AbstractIntegrator, AbstractModel
+from ._peaks import first_exceedance as _first_exceedance
+from ._peaks import hermite_peak as _hermite_peak
 from .results import Solution, Status
 
 # θs/α′ default from the work–precision study (16 quasi-rigid pulse scenes, tanα = 0.2, error of
@@ -249,6 +252,45 @@ class _Mechanics(eqx.Module):
         if self.fixed_base:
             return self.forces(t, q, v, excitation)[3][0]
         return self.spring_moment(q[0]) + self.c * v[0]
+
+    # -- second-order form (generalized-α) -------------------------------------------------------
+    def forces_without_spring(self, t, q, v, excitation):
+        """(f_rest, f_ext, f_damp) with the total force f_rest − M(θ) e₀: everything but the
+        spring's elastic moment M(θ), which the generalized-α step solves for exactly."""
+        f_total, f_ext, f_damp, _ = self.forces(t, q, v, excitation)
+        if not self.fixed_base:
+            f_total = f_total.at[0].add(self.spring_moment(q[0]))
+        return f_total, f_ext, f_damp
+
+    def mass_matrix(self):
+        return jnp.reshape(self.Itot, (1, 1)) if self.n is None else self.M
+
+    def tangents(self):
+        """(K₀, C₀): stiffness (Hessian of the column potential, spring excluded) and damping
+        (Rayleigh on the deformations + the base damper) at the preloaded rest state."""
+        N = self.ndof
+        q0 = jnp.zeros(N) if self.n is None else self.q_eq
+        K0 = jax.hessian(self._column_potential)(q0)
+        if self.n is None:
+            C0 = jnp.zeros((1, 1))
+        else:
+            C0 = jax.jacfwd(lambda v: self._column_damping(q0, v))(jnp.zeros(N))
+        if not self.fixed_base:
+            C0 = C0.at[0, 0].add(self.c)
+        return K0, C0
+
+    def rotate(self, x, theta):
+        """Tangent vectors of the column rotated rigidly by θ about the base (T(θ) x: each node's
+        (u_x, u_y) turned by θ; rotations unchanged). The strain energy is invariant under the
+        rigid rotation, so its Hessian there is T K₀ Tᵀ, and M and the deformation damping are
+        invariant: the tangent at a rocked configuration is the rest tangent rotated."""
+        if self.n is None:
+            return x
+        c, s = jnp.cos(theta), jnp.sin(theta)
+        rest = x[1:].reshape(self.n, 3)
+        ux, uy = rest[:, 0], rest[:, 1]
+        rest = jnp.stack([c * ux + s * uy, -s * ux + c * uy, rest[:, 2]], axis=1)
+        return jnp.concatenate([x[:1], rest.reshape(-1)])
 
     # -- first-order form -------------------------------------------------------------------------
     def split(self, y):
@@ -443,57 +485,6 @@ class SpringIntegrator(AbstractIntegrator):
         )
 
 
-# ----------------------------------------------------------------------------------------------
-# peaks from the recorded steps
-# ----------------------------------------------------------------------------------------------
-def _hermite_peak(ts, th, om):
-    """max |θ| over all steps from (t, θ, θ̇) at the step ends, maximising the cubic Hermite
-    interpolant of each step in closed form. Unused (non-finite) entries are ignored."""
-    t0, t1 = ts[:-1], ts[1:]
-    valid = jnp.isfinite(t1) & jnp.isfinite(t0) & (t1 > t0)
-    safe = lambda x, fill: jnp.where(valid, x, fill)
-    t0s, t1s = safe(t0, 0.0), safe(t1, 1.0)
-    a0, a1 = safe(th[:-1], 0.0), safe(th[1:], 0.0)
-    w0, w1 = safe(om[:-1], 0.0), safe(om[1:], 0.0)
-    dt = t1s - t0s
-    # dθ/ds = A s² + B s + C, s ∈ [0, 1]
-    A = 6 * a0 + 3 * dt * w0 - 6 * a1 + 3 * dt * w1
-    B = -6 * a0 - 4 * dt * w0 + 6 * a1 - 2 * dt * w1
-    C = dt * w0
-    disc = B**2 - 4 * A * C
-    sq = jnp.sqrt(jnp.where(disc > 0, disc, 1.0))
-    qq = -0.5 * (B + jnp.where(B >= 0, 1.0, -1.0) * sq)
-    qok = (jnp.abs(qq) > 0) & (disc > 0)
-    qs = jnp.where(qok, qq, 1.0)
-    r1 = jnp.where(qok & (jnp.abs(A) > 0), qq / jnp.where(jnp.abs(A) > 0, A, 1.0), -1.0)
-    r2 = jnp.where(qok, C / qs, -1.0)
-    # degenerate quadratic (A = 0): single root −C/B
-    r3 = jnp.where((jnp.abs(A) == 0) & (jnp.abs(B) > 0), -C / jnp.where(jnp.abs(B) > 0, B, 1.0), -1.0)
-
-    def herm(s):
-        s2, s3 = s * s, s * s * s
-        return (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * dt * w0 + (-2 * s3 + 3 * s2) * a1 + (s3 - s2) * dt * w1
-
-    best = jnp.maximum(jnp.abs(a0), jnp.abs(a1))
-    for r in (r1, r2, r3):
-        inside = (r > 0) & (r < 1)
-        best = jnp.maximum(best, jnp.where(inside, jnp.abs(herm(jnp.where(inside, r, 0.5))), 0.0))
-    return jnp.max(jnp.where(valid, best, 0.0))
-
-
-def _first_exceedance(ts, th, level):
-    """First time |θ| exceeds `level` (linear between recorded steps); +inf if never."""
-    x = jnp.abs(th) - level
-    ok = jnp.isfinite(ts) & jnp.isfinite(x)
-    x = jnp.where(ok, x, -1.0)
-    above = x > 0
-    k = jnp.argmax(above)
-    km = jnp.maximum(k - 1, 0)
-    frac = jnp.clip(-x[km] / jnp.where(x[k] - x[km] > 0, x[k] - x[km], 1.0), 0.0, 1.0)
-    tk = jnp.where(k > 0, ts[km] + frac * (ts[k] - ts[km]), ts[k])
-    return jnp.where(jnp.any(above), tk, jnp.inf)
-
-
 def _status_of(result) -> Status:
     ok = (result == diffrax.RESULTS.successful) | (result == diffrax.RESULTS.event_occurred)
     steps = result == diffrax.RESULTS.max_steps_reached
@@ -678,13 +669,15 @@ class SpringModel(AbstractModel):
 
     # -- run --------------------------------------------------------------------------------------
     def run(self, excitation, integrator, save, t1) -> Solution:
-        if not isinstance(integrator, SpringIntegrator):
-            raise JaxrockInputError(f"SpringModel needs a SpringIntegrator, got {type(integrator).__name__}")
+        if not isinstance(integrator, (SpringIntegrator, GeneralizedAlpha)):
+            raise JaxrockInputError(f"SpringModel needs a SpringIntegrator or GeneralizedAlpha, got {type(integrator).__name__}")
         fields = () if save is None else save.fields
         track = any(f in _ENERGY_FIELDS for f in fields)
         mech = self.mechanics(track_energy=track)
         alpha_r = self.block.alpha_r
         thr = self.threshold * alpha_r
+        if isinstance(integrator, GeneralizedAlpha):
+            return self._run_alpha(mech, excitation, integrator, save, t1, thr)
         y0 = mech.initial_state()
         t_start = excitation.t_start
         t_end = excitation.t_end
@@ -727,8 +720,8 @@ class SpringModel(AbstractModel):
         st1 = _status_of(sol1.result)
         over1 = (sol1.result == diffrax.RESULTS.event_occurred) & (st1 == Status.ok)
         # phase 2: free motion until the answer is fixed
-        t_stop = t_end + 20 * 2 * jnp.pi / mech.p_r if t1 is None else jnp.maximum(t1, t_end)
-        margin = 1.0 if mech.n is None else 0.9
+        t_stop = self._summary_end(mech, excitation, t1)
+        margin = self._settle_margin(mech)
         v_ref = margin * mech.rigid_potential(peak1)
 
         def settled(t, y, args, **kw):
@@ -760,20 +753,43 @@ class SpringModel(AbstractModel):
         th_all = jnp.concatenate([th1, th2])
         t_last2 = jnp.max(jnp.where(jnp.isfinite(ts2), ts2, -jnp.inf))
         t_over = jnp.where(over1, t_start2, jnp.where(over2, t_last2, jnp.inf))
-        return self._finish(peak, over1 | over2, t_over, ts_all, th_all, theta_up, status, thr, None, None)
+        return self._finish(peak, over1 | over2, t_over, _first_exceedance(ts_all, th_all, theta_up), status, thr, None, None)
+
+    def _summary_end(self, mech, excitation, t1):
+        """Summary runs end at t1, or 20 rocking periods 2π/p′ after the excitation."""
+        t_end = excitation.t_end
+        return t_end + 20 * 2 * jnp.pi / mech.p_r if t1 is None else jnp.maximum(t1, t_end)
+
+    @staticmethod
+    def _settle_margin(mech):
+        """Energy margin of the settled test: exact for the one-DOF model; 10 % for the flexural
+        P-Δ softening of a flexible column."""
+        return 1.0 if mech.n is None else 0.9
+
+    def _run_alpha(self, mech, excitation, integrator, save, t1, thr):
+        if self.fixed_base:
+            thr = jnp.inf
+        if save is not None:
+            t_stop = save.ts[-1] if t1 is None else t1
+            out = integrator.integrate(mech, excitation, t_stop, thr=thr, save_ts=save.ts, fields=save.fields)
+            ts_hist = save.ts
+        else:
+            t_stop = self._summary_end(mech, excitation, t1)
+            out = integrator.integrate(mech, excitation, t_stop, thr=thr, settle_margin=self._settle_margin(mech))
+            ts_hist = None
+        return self._finish(out["peak"], out["overturned"], out["t_overturn"], out["t_up"], out["status"], thr, ts_hist, out["history"], out["steps"])
 
     def _summary(self, peak, t_last, result, ts, th, theta_up, status, thr, ts_hist, hist):
         over = (result == diffrax.RESULTS.event_occurred) & (peak >= thr * (1 - 1e-6))
         t_over = jnp.where(over, t_last, jnp.inf)
-        return self._finish(peak, over, t_over, ts, th, theta_up, status, thr, ts_hist, hist)
+        return self._finish(peak, over, t_over, _first_exceedance(ts, th, theta_up), status, thr, ts_hist, hist)
 
-    def _finish(self, peak, over, t_over, ts, th, theta_up, status, thr, ts_hist, hist):
+    def _finish(self, peak, over, t_over, t_up, status, thr, ts_hist, hist, n_iterations=0):
         alpha_r = self.block.alpha_r
         max_theta = jnp.where(over, self.threshold, jnp.minimum(peak, thr) / alpha_r)
         bad = ~jnp.isfinite(max_theta)
         status = Status.where(bad & (status == Status.ok), Status.solver_failed, status)
         max_theta = jnp.where(bad, jnp.nan, max_theta)
-        t_up = _first_exceedance(ts, th, theta_up)
         return Solution(
             max_theta=max_theta,
             overturned=over,
@@ -784,12 +800,14 @@ class SpringModel(AbstractModel):
             status=status,
             ts=ts_hist,
             history=hist,
+            n_iterations=n_iterations,
         )
 
 
 __all__ = [
     "SpringModel",
     "SpringIntegrator",
+    "GeneralizedAlpha",
     "Column",
     "cbar_eq17",
     "first_period_eq21",

@@ -1,0 +1,54 @@
+"""Peaks and threshold crossings of the base rotation from (t, θ, θ̇) at step ends, shared by the
+spring model's integrators (diffrax and generalized-α)."""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+
+def hermite_peak(ts, th, om):
+    """max |θ| over all steps from (t, θ, θ̇) at the step ends, maximising the cubic Hermite
+    interpolant of each step in closed form. Unused (non-finite) entries are ignored."""
+    t0, t1 = ts[:-1], ts[1:]
+    valid = jnp.isfinite(t1) & jnp.isfinite(t0) & (t1 > t0)
+    safe = lambda x, fill: jnp.where(valid, x, fill)
+    t0s, t1s = safe(t0, 0.0), safe(t1, 1.0)
+    a0, a1 = safe(th[:-1], 0.0), safe(th[1:], 0.0)
+    w0, w1 = safe(om[:-1], 0.0), safe(om[1:], 0.0)
+    dt = t1s - t0s
+    # dθ/ds = A s² + B s + C, s ∈ [0, 1]
+    A = 6 * a0 + 3 * dt * w0 - 6 * a1 + 3 * dt * w1
+    B = -6 * a0 - 4 * dt * w0 + 6 * a1 - 2 * dt * w1
+    C = dt * w0
+    disc = B**2 - 4 * A * C
+    sq = jnp.sqrt(jnp.where(disc > 0, disc, 1.0))
+    qq = -0.5 * (B + jnp.where(B >= 0, 1.0, -1.0) * sq)
+    qok = (jnp.abs(qq) > 0) & (disc > 0)
+    qs = jnp.where(qok, qq, 1.0)
+    r1 = jnp.where(qok & (jnp.abs(A) > 0), qq / jnp.where(jnp.abs(A) > 0, A, 1.0), -1.0)
+    r2 = jnp.where(qok, C / qs, -1.0)
+    # degenerate quadratic (A = 0): single root −C/B
+    r3 = jnp.where((jnp.abs(A) == 0) & (jnp.abs(B) > 0), -C / jnp.where(jnp.abs(B) > 0, B, 1.0), -1.0)
+
+    def herm(s):
+        s2, s3 = s * s, s * s * s
+        return (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * dt * w0 + (-2 * s3 + 3 * s2) * a1 + (s3 - s2) * dt * w1
+
+    best = jnp.maximum(jnp.abs(a0), jnp.abs(a1))
+    for r in (r1, r2, r3):
+        inside = (r > 0) & (r < 1)
+        best = jnp.maximum(best, jnp.where(inside, jnp.abs(herm(jnp.where(inside, r, 0.5))), 0.0))
+    return jnp.max(jnp.where(valid, best, 0.0))
+
+
+def first_exceedance(ts, th, level):
+    """First time |θ| exceeds `level` (linear between recorded steps); +inf if never."""
+    x = jnp.abs(th) - level
+    ok = jnp.isfinite(ts) & jnp.isfinite(x)
+    x = jnp.where(ok, x, -1.0)
+    above = x > 0
+    k = jnp.argmax(above)
+    km = jnp.maximum(k - 1, 0)
+    frac = jnp.clip(-x[km] / jnp.where(x[k] - x[km] > 0, x[k] - x[km], 1.0), 0.0, 1.0)
+    tk = jnp.where(k > 0, ts[km] + frac * (ts[k] - ts[km]), ts[k])
+    return jnp.where(jnp.any(above), tk, jnp.inf)
