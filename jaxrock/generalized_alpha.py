@@ -41,6 +41,9 @@ from .model import AbstractIntegrator
 from .results import Status
 
 
+_THETA_RTOL = 1e-10  # the spring's scalar solve: relative to |θ| + θs
+
+
 class GeneralizedAlpha(AbstractIntegrator):
     """Adaptive generalized-α for `SpringModel` (quasi-rigid or flexible).
 
@@ -88,6 +91,12 @@ class GeneralizedAlpha(AbstractIntegrator):
 
         Returns a dict: peak (max |θ|, from each step's cubic Hermite interpolant), overturned,
         t_overturn, t_up (first |θ| > 3 θs), status, steps (attempted), history (at `save_ts`)."""
+        c0, cond, body, result = self.machinery(mech, excitation, t_stop, thr=thr, settle_margin=settle_margin, save_ts=save_ts, fields=fields)
+        return result(jax.lax.while_loop(cond, body, c0))
+
+    def machinery(self, mech, excitation, t_stop, *, thr, settle_margin=None, save_ts=None, fields=()):
+        """(carry0, cond, body, result) of the step loop, for runs advanced in passes
+        (`jaxrock.spring.advance`): the carry is a dict of arrays, `body` one attempted step."""
         am, af, gamma, beta = self.coefficients
         K = self.levels
         N = mech.ndof
@@ -124,15 +133,16 @@ class GeneralizedAlpha(AbstractIntegrator):
         def tol_of(q_a, q_b):
             return self.atol * scale + self.rtol * jnp.maximum(jnp.abs(q_a), jnp.abs(q_b))
 
-        def solve_theta(rhs, z0):
-            """θ with θ + z₀ M(θ) = rhs (monotone): Newton kept inside the bracket."""
+        def solve_theta(rhs, z0, x):
+            """θ with θ + z₀ M(θ) = rhs (monotone in θ; the root lies in [rhs − z₀ My, rhs + z₀ My]):
+            Newton from the current iterate `x`, kept inside the bracket (bisection otherwise)."""
             span = z0 * My
             lo, hi = rhs - span, rhs + span
-            x = jnp.clip(rhs - z0 * spring(rhs), lo, hi)
+            x = jnp.clip(x, lo, hi)
 
             def cond(c):
                 x, lo, hi, dx, i = c
-                return (jnp.abs(dx) > 1e-13 * (jnp.abs(x) + theta_s)) & (i < 60)
+                return (jnp.abs(dx) > _THETA_RTOL * (jnp.abs(x) + theta_s)) & (i < 100)
 
             def body(c):
                 x, lo, hi, dx, i = c
@@ -162,7 +172,7 @@ class GeneralizedAlpha(AbstractIntegrator):
             t, q, v, a, f_tot = c["t"], c["q"], c["v"], c["a"], c["f"]
             n1 = c["n"] + stride[k]
             t1 = t0 + n1.astype(dtype) * dt_min
-            Ki = Kinv[k]
+            Ki = c["Kinv"][k]
             th_rot = q[0]
             apply = lambda r: mech.rotate(Ki @ mech.rotate(r, -th_rot), th_rot)
             z = (1 - af) * apply(e0) * free
@@ -184,7 +194,7 @@ class GeneralizedAlpha(AbstractIntegrator):
                 q1, _, i, _, r_prev = nc
                 R, aux = residual_parts(q1)
                 x = apply(R) * free
-                th_new = solve_theta(q1[0] - x[0], z0) if not clamp else q1[0]
+                th_new = solve_theta(q1[0] - x[0], z0, q1[0]) if not clamp else q1[0]
                 dq = -x - spring(th_new) * z
                 dq = dq.at[0].set(th_new - q1[0])
                 r = jnp.max(jnp.abs(dq) / tol_of(q, q1))
@@ -196,7 +206,7 @@ class GeneralizedAlpha(AbstractIntegrator):
                 return q1, conv, i + 1, aux, r
 
             qp = q + dt * v + 0.5 * dt**2 * a
-            _, aux0 = residual_parts(qp)
+            aux0 = (a, v, f_tot, f_tot, f_tot)  # placeholders: the loop runs at least once
             init = (qp, jnp.asarray(False), 0, aux0, jnp.asarray(jnp.inf, dtype))
             q1, conv, _, aux, _ = jax.lax.while_loop(ncond, nbody, init)
             a1, v1, fr1, fe1, fd1 = aux
@@ -220,7 +230,8 @@ class GeneralizedAlpha(AbstractIntegrator):
             fd=f0_damp, fe=f0_ext,
             peak=jnp.abs(q0[0]), t_up=jnp.asarray(jnp.inf, dtype), over=jnp.asarray(False),
             t_over=jnp.asarray(jnp.inf, dtype), done=jnp.asarray(False), failed=jnp.asarray(False),
-            steps=jnp.zeros((), jnp.int32), hist=hist0, ptr=jnp.sum(save_ts <= t0) if save_ts is not None else 0,
+            steps=jnp.zeros((), jnp.int32), hist=hist0, ptr=jnp.sum(save_ts <= t0) if save_ts is not None else jnp.zeros((), jnp.int32),
+            Kinv=Kinv,
         )
         theta_up = 3.0 * theta_s
 
@@ -263,23 +274,28 @@ class GeneralizedAlpha(AbstractIntegrator):
             new = dict(
                 n=s["n1"], k=k_new, t=t1, q=s["q1"], v=s["v1"], a=s["a1"], f=s["f1"], ew=ew, fd=s["fd1"], fe=s["fe1"],
                 peak=peak, t_up=t_up, over=over, t_over=jnp.where(over, t_over, jnp.inf), done=finished,
-                failed=jnp.asarray(False), steps=c["steps"] + 1, hist=c["hist"], ptr=c["ptr"],
+                failed=jnp.asarray(False), steps=c["steps"] + 1, hist=c["hist"], ptr=c["ptr"], Kinv=c["Kinv"],
             )
             if save_ts is not None:
                 new["hist"], new["ptr"] = _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track)
             rejected = dict(c, k=k_new, steps=c["steps"] + 1, done=failed, failed=failed)
-            return jax.tree_util.tree_map(lambda x_ok, x_no: jnp.where(ok, x_ok, x_no), new, rejected)
+            Kinv = new.pop("Kinv")  # constant: not copied through the select
+            del rejected["Kinv"]
+            out = jax.tree_util.tree_map(lambda x_ok, x_no: jnp.where(ok, x_ok, x_no), new, rejected)
+            return dict(out, Kinv=Kinv)
 
-        c = jax.lax.while_loop(cond, body, carry)
-        status = Status.where(
-            c["failed"] | ~jnp.isfinite(c["peak"]),
-            Status.solver_failed,
-            Status.where(c["done"], Status.ok, Status.max_steps),
-        )
-        return dict(
-            peak=c["peak"], overturned=c["over"], t_overturn=c["t_over"], t_up=c["t_up"], status=status,
-            steps=c["steps"], history=c["hist"], t_last=c["t"], level=c["k"],
-        )
+        def result(c):
+            status = Status.where(
+                c["failed"] | ~jnp.isfinite(c["peak"]),
+                Status.solver_failed,
+                Status.where(c["done"], Status.ok, Status.max_steps),
+            )
+            return dict(
+                peak=c["peak"], overturned=c["over"], t_overturn=c["t_over"], t_up=c["t_up"], status=status,
+                steps=c["steps"], history=c["hist"], t_last=c["t"], level=c["k"],
+            )
+
+        return carry, cond, body, result
 
 
 def _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track):

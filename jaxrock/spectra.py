@@ -19,7 +19,8 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import rigid
+from . import rigid, spring
+from .generalized_alpha import GeneralizedAlpha
 from ._validate import JaxrockInputError, check_grid
 from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
 from .geometry import G
@@ -117,15 +118,23 @@ class Spectrum(eqx.Module):
 
 
 # -- batched runs ---------------------------------------------------------------------------------
-# Loop iterations per pass: short first passes (most cells finish in a few iterations), then
-# longer ones for the few cells still running.
-_PASSES = (4, 8, 16, 32)
+def _stepper(model, integ):
+    """How a summary run of `model` is advanced in passes: (module with start/advance/finish/
+    is_finished, pass lengths in loop iterations, iteration budget, smallest batch), or None (one
+    vmapped call). Short first passes (most cells finish early), then longer ones for the cells
+    still running. The smallest batch is where a smaller one stops paying: a rigid iteration is
+    cheap and its batch overhead large (64); a flexible spring step is dear (8)."""
+    if isinstance(model, rigid.RigidModel):
+        return rigid, (4, 8, 16, 32), integ.max_iterations, 64
+    if isinstance(model, spring.SpringModel) and isinstance(integ, GeneralizedAlpha):
+        return spring, (128, 256, 512, 1024), integ.max_steps, 8
+    return None
 
 
-def _bucket(n: int, batch: int) -> int:
+def _bucket(n: int, batch: int, smallest: int) -> int:
     """Pad sizes to a few fixed values so the compiled pass is reused (batch, batch/4, batch/16, ...)."""
     size = batch
-    while size // 4 >= max(n, 64):
+    while size // 4 >= max(n, smallest):
         size //= 4
     return size
 
@@ -136,18 +145,18 @@ def _vmap(fn, model_batched: bool):
 
 
 @eqx.filter_jit
-def _start(model, integ, exc, model_batched):
-    return _vmap(lambda m, e: rigid.start(m, e, integ), model_batched)(model, exc)
+def _start(mod, model, integ, exc, model_batched):
+    return _vmap(lambda m, e: mod.start(m, e, integ), model_batched)(model, exc)
 
 
 @eqx.filter_jit
-def _advance(model, integ, exc, carry, n, model_batched):
-    return _vmap(lambda m, ec: rigid.advance(m, ec[0], integ, ec[1], n), model_batched)(model, (exc, carry))
+def _advance(mod, model, integ, exc, carry, n, model_batched):
+    return _vmap(lambda m, ec: mod.advance(m, ec[0], integ, ec[1], n), model_batched)(model, (exc, carry))
 
 
 @eqx.filter_jit
-def _finish(model, integ, exc, carry, model_batched):
-    return _vmap(lambda m, ec: rigid.finish(m, ec[0], integ, ec[1]), model_batched)(model, (exc, carry))
+def _finish(mod, model, integ, exc, carry, model_batched):
+    return _vmap(lambda m, ec: mod.finish(m, ec[0], integ, ec[1]), model_batched)(model, (exc, carry))
 
 
 @eqx.filter_jit
@@ -155,8 +164,9 @@ def _simulate_batch(model, integ, exc, model_batched):
     return _vmap(lambda m, e: simulate(m, e, integrator=integ), model_batched)(model, exc)
 
 
-def _rigid_batch(model, excitations, integ, model_batched: bool) -> Solution:
-    """Run a batch of rigid scenes with compaction between passes (the same results as simulate)."""
+def _compacted_batch(mod, passes, budget, smallest, model, excitations, integ, model_batched: bool) -> Solution:
+    """Run a batch in passes, gathering the cells still running between passes (the same
+    results as `simulate`, cell by cell)."""
     n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
     # The carry (and the batched inputs) live on the host between passes: gathers and scatters of
     # changing sizes in numpy cost nothing, where in JAX each new size would compile.
@@ -164,20 +174,21 @@ def _rigid_batch(model, excitations, integ, model_batched: bool) -> Solution:
     dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
     dyn_m, static_m = eqx.partition(model, eqx.is_array)
     dyn_e, dyn_m = tree_np(dyn_e), tree_np(dyn_m)
-    carry = tree_np(_start(model, integ, excitations, model_batched))
-    used, n_pass = 0, _PASSES[0]
-    while used < integ.max_iterations:
-        todo = np.flatnonzero(~np.asarray(rigid.is_finished(carry)))
+    carry = tree_np(_start(mod, model, integ, excitations, model_batched))
+    used, n_pass = 0, passes[0]
+    while used < budget:
+        todo = np.flatnonzero(~np.asarray(mod.is_finished(carry)))
         if todo.size == 0:
             break
-        size = _bucket(todo.size, n)
+        n_pass = min(n_pass, budget - used)
+        size = _bucket(todo.size, n, smallest)
         for lo in range(0, todo.size, size):
             idx = todo[lo : lo + size]
             padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
             take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
             sub_m = eqx.combine(take(dyn_m), static_m) if model_batched else model
             sub_e = eqx.combine(take(dyn_e), static_e)
-            sub_c = tree_np(_advance(sub_m, integ, sub_e, take(carry), jnp.asarray(n_pass), model_batched))
+            sub_c = tree_np(_advance(mod, sub_m, integ, sub_e, take(carry), jnp.asarray(n_pass), model_batched))
 
             def put(x, y):
                 x[idx] = y[: idx.size]
@@ -185,8 +196,8 @@ def _rigid_batch(model, excitations, integ, model_batched: bool) -> Solution:
 
             carry = jax.tree_util.tree_map(put, carry, sub_c)
         used += n_pass
-        n_pass = _PASSES[min(_PASSES.index(n_pass) + 1, len(_PASSES) - 1)]
-    return _finish(model, integ, excitations, carry, model_batched)
+        n_pass = passes[min(passes.index(n_pass) + 1, len(passes) - 1)] if n_pass in passes else n_pass
+    return _finish(mod, model, integ, excitations, carry, model_batched)
 
 
 def run_batch(
@@ -199,8 +210,9 @@ def run_batch(
     """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
     and so does `model` when `model_batched` (one model per scene; else one model for all)."""
     integ = model.default_integrator() if integrator is None else integrator
-    if isinstance(model, rigid.RigidModel):
-        return _rigid_batch(model, excitations, integ, model_batched)
+    stepper = _stepper(model, integ)
+    if stepper is not None:
+        return _compacted_batch(*stepper, model, excitations, integ, model_batched)
     return _simulate_batch(model, integ, excitations, model_batched)
 
 

@@ -221,12 +221,20 @@ class _Mechanics(eqx.Module):
     # -- forces -----------------------------------------------------------------------------------
     def _column_damping(self, q, v):
         """Rayleigh force a₁ Jᵀ K_e J v on the local deformations (never on rigid motion)."""
+        return self._column_forces(q, v)[1]
+
+    def _column_forces(self, q, v):
+        """(−∇V_column, Rayleigh force) from one linearisation d(q) ≈ d + J δq of the element
+        deformations: the strain energy is ½ Σ dᵀ K_e d, so ∇U = Jᵀ K_e d, and the damping force
+        is a₁ Jᵀ K_e J v; the gravity force is constant (the potential is linear in the heights)."""
         f = lambda qq: beam.element_deformations(qq, self.h, self.n)
-        d, d_dot = jax.jvp(f, (q,), (v,))
-        Kd = beam.deformation_energy_rate_matrix(d_dot, self.h, self.n, self.EA, self.EI)
-        _, vjp = jax.vjp(f, q)
-        (fd,) = vjp(Kd)
-        return self.a1 * fd
+        d, jvp_fn = jax.linearize(f, q)
+        transpose = jax.linear_transpose(jvp_fn, q)
+        K_e = lambda x: beam.deformation_energy_rate_matrix(x, self.h, self.n, self.EA, self.EI)
+        (g_el,) = transpose(K_e(d))
+        (g_d,) = transpose(K_e(jvp_fn(v)))
+        g_grav = jax.grad(beam.gravity_potential)(q, self.h, self.n, self.m)
+        return -(g_el + g_grav), self.a1 * g_d
 
     def forces(self, t, q, v, excitation):
         """(f_total, f_ext, f_damp, f_nospring): generalised forces [N, N·m]."""
@@ -237,8 +245,7 @@ class _Mechanics(eqx.Module):
             f_dcol = jnp.zeros_like(q)
         else:
             f_ext = -ug * self.r
-            f_col = -jax.grad(self._column_potential)(q)
-            f_dcol = self._column_damping(q, v)
+            f_col, f_dcol = self._column_forces(q, v)
         f_nospring = f_ext + f_col - f_dcol
         if self.fixed_base:
             f_sp = jnp.zeros_like(q)
@@ -558,17 +565,23 @@ class SpringModel(AbstractModel):
         self.threshold = threshold
 
     # -- AbstractModel --------------------------------------------------------------------------
-    def default_integrator(self) -> SpringIntegrator:
-        """Work–precision choice (measured, 2 CPU cores, 32×32 pulse grid vmapped, tanα = 0.2,
-        error of max|θ|/α against Kvaerno5 at 1e-11): quasi-rigid → explicit Tsit5 at
-        rtol = atol = 1e-10 (max error 3.9e-7, 9.2 ms/scene) rather than Kvaerno5 at 1e-8
-        (1.3e-5, 10.3 ms) or 1e-6 (4.8e-3, 11.3 ms): the pre-yield branch (θs = 10⁻⁴ α) is only
-        mildly stiff. Flexible → Kvaerno5 + Newton at 1e-6 (E = 10¹⁴ Pa, 4 elements: 0.663042 vs
-        the one-DOF 0.663037; below ~1e-7 the round-off of a stiff column's accelerations exceeds
-        the velocity tolerance and the run ends with `Status.max_steps`)."""
+    def default_integrator(self) -> "SpringIntegrator | GeneralizedAlpha":
+        """Work–precision choice (measured on 2 CPU cores, vmapped grids, `benchmarks/bench_spring.py`).
+
+        Quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10 (32×32 pulse grid, tanα = 0.2: max error
+        of max|θ|/α 2.4e-8 against Tsit5 at 1e-11, ~1.5–1.9 ms/scene; reverse-mode differentiable,
+        which the calibration of c̄ needs). `GeneralizedAlpha(1e-6, 1e-6)` runs the same grid at
+        ~0.27 ms/scene with max error 7.4e-3 (median 7e-5): pass it for spectra where that suffices.
+
+        Flexible → `GeneralizedAlpha(1e-5, 1e-5)`, ρ∞ = 0.9 (8×8 grid of 2h = 50 m concrete
+        columns, 10 elements, error against generalized-α at 1e-9): 4.9 ms/scene, max error
+        3.7e-4 (median 5e-5); at 1e-4: 4.4 ms, 2.8e-3; at 1e-6: 9.3 ms, 1.5e-4. ρ∞ = 1 (the
+        trapezoidal rule) leaves the spring's impacts ringing in the stiff axial modes: 30–100×
+        more steps. diffrax's Kvaerno5 + Newton at 1e-6 (`SpringIntegrator()`) costs ~1.6 s/scene:
+        use it for reverse-mode gradients of a flexible column."""
         if self.column is None:
             return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5")
-        return SpringIntegrator(rtol=1e-6, atol=1e-6, solver="kvaerno5")
+        return GeneralizedAlpha(rtol=1e-5, atol=1e-5)
 
     @property
     def history_fields(self) -> tuple[str, ...]:
@@ -767,16 +780,23 @@ class SpringModel(AbstractModel):
         return 1.0 if mech.n is None else 0.9
 
     def _run_alpha(self, mech, excitation, integrator, save, t1, thr):
-        if self.fixed_base:
-            thr = jnp.inf
-        if save is not None:
-            t_stop = save.ts[-1] if t1 is None else t1
-            out = integrator.integrate(mech, excitation, t_stop, thr=thr, save_ts=save.ts, fields=save.fields)
-            ts_hist = save.ts
-        else:
-            t_stop = self._summary_end(mech, excitation, t1)
-            out = integrator.integrate(mech, excitation, t_stop, thr=thr, settle_margin=self._settle_margin(mech))
-            ts_hist = None
+        if save is None:
+            return finish(self, excitation, integrator, advance(self, excitation, integrator, start(self, excitation, integrator, t1), None, t1), t1)
+        t_stop = save.ts[-1] if t1 is None else t1
+        out = integrator.integrate(mech, excitation, t_stop, thr=self._alpha_threshold(thr), save_ts=save.ts, fields=save.fields)
+        return self._alpha_solution(out, thr, save.ts)
+
+    def _alpha_threshold(self, thr):
+        return jnp.inf if self.fixed_base else thr
+
+    def _alpha_summary(self, excitation, integrator, t1):
+        """The generalized-α step loop of a summary run (stops when the answer is fixed)."""
+        mech = self.mechanics()
+        thr = self._alpha_threshold(self.threshold * self.block.alpha_r)
+        t_stop = self._summary_end(mech, excitation, t1)
+        return integrator.machinery(mech, excitation, t_stop, thr=thr, settle_margin=self._settle_margin(mech))
+
+    def _alpha_solution(self, out, thr, ts_hist=None):
         return self._finish(out["peak"], out["overturned"], out["t_overturn"], out["t_up"], out["status"], thr, ts_hist, out["history"], out["steps"])
 
     def _summary(self, peak, t_last, result, ts, th, theta_up, status, thr, ts_hist, hist):
@@ -802,6 +822,32 @@ class SpringModel(AbstractModel):
             history=hist,
             n_iterations=n_iterations,
         )
+
+
+# ----------------------------------------------------------------------------------------------
+# summary runs in passes (generalized-α only): `jaxrock.spectra.run_batch` advances a batch a
+# few hundred steps at a time and gathers the scenes still running, so finished ones stop costing
+# ----------------------------------------------------------------------------------------------
+def start(model: SpringModel, exc: AbstractExcitation, integ: GeneralizedAlpha, t1=None) -> dict:
+    return model._alpha_summary(exc, integ, t1)[0]
+
+
+def advance(model: SpringModel, exc: AbstractExcitation, integ: GeneralizedAlpha, c: dict, n, t1=None) -> dict:
+    """At most `n` more attempted steps (all remaining ones when `n` is None)."""
+    _, cond, body, _ = model._alpha_summary(exc, integ, t1)
+    if n is None:
+        return jax.lax.while_loop(cond, body, c)
+    c, _ = jax.lax.while_loop(lambda ci: cond(ci[0]) & (ci[1] < n), lambda ci: (body(ci[0]), ci[1] + 1), (c, 0))
+    return c
+
+
+def finish(model: SpringModel, exc: AbstractExcitation, integ: GeneralizedAlpha, c: dict, t1=None) -> Solution:
+    result = model._alpha_summary(exc, integ, t1)[3]
+    return model._alpha_solution(result(c), model.threshold * model.block.alpha_r)
+
+
+def is_finished(c: dict):
+    return c["done"] | c["failed"]
 
 
 __all__ = [

@@ -18,7 +18,7 @@ from jaxrock.excitation import RickerPulse
 from jaxrock.geometry import G, Block
 from jaxrock.model import simulate
 from jaxrock.results import Save, Status
-from jaxrock.spring import Column, SpringIntegrator, SpringModel, cbar_eq17, first_period_eq21, pushover_eq9
+from jaxrock.spring import Column, GeneralizedAlpha, SpringIntegrator, SpringModel, cbar_eq17, first_period_eq21, pushover_eq9
 
 _sim = jax.jit(lambda m, ex: simulate(m, ex))
 _period = jax.jit(beam.first_period, static_argnums=1)
@@ -247,11 +247,23 @@ def test_energy_balance_flexible():
     np.testing.assert_allclose(H["w_top"], H["u_top"] - 2 * blk.h * jnp.sin(H["theta"]), atol=1e-12)
 
 
-def test_flexible_E1e14_converges_to_quasi_rigid():
+@pytest.mark.parametrize(
+    "integrator, tol",
+    [
+        # the ESDIRK run this equivalence was established with (docstring numbers)
+        (SpringIntegrator(rtol=1e-6, atol=1e-6, solver="kvaerno5"), 1e-4),
+        # generalized-α, 2nd order: its global error is ~ (steps × tolerance), measured on this
+        # scene 2.2e-3 at the default 1e-5, 4.5e-4 at 1e-6, 1.2e-5 at 1e-7, 2.1e-5 at 1e-8 —
+        # 1e-7 with 1e-4 keeps the test about the model (the FE column's compliance), not the solver
+        (GeneralizedAlpha(rtol=1e-7, atol=1e-7), 1e-4),
+    ],
+    ids=["kvaerno5", "generalized_alpha"],
+)
+def test_flexible_E1e14_converges_to_quasi_rigid(integrator, tol):
     """Paper section 3: the FE column with E = 10¹⁴ Pa is the quasi-rigid SM.
 
     Measured (tanα = 0.2, 2h = 10 m, a_p = 4 g tanα, ω_p = 2π, 4 elements, Kvaerno5 + Newton):
-    one-DOF 0.663037 (Kvaerno5 1e-10); FE 0.663801 at 1e-5, 0.663042 at 1e-6 (default). Two bugs
+    one-DOF 0.663037 (Kvaerno5 1e-10); FE 0.663801 at 1e-5, 0.663042 at 1e-6. Two bugs
     were behind the former 0.637 and the stall: the ground load missed the base-node coupling of
     the consistent mass (`beam.ground_load`: −m_e/6 üg at node 1, 2 % of the overturning moment),
     and Newton's residual test could not pass the round-off of the stiff column's accelerations.
@@ -262,9 +274,9 @@ def test_flexible_E1e14_converges_to_quasi_rigid():
     ex = RickerPulse(4 * G * 0.2, 2 * math.pi)
     qr = float(_max(SpringModel(blk), ex))
     assert qr == pytest.approx(0.663037, abs=2e-5)
-    s = _sim(SpringModel(blk, Column(1e14, 2500.0), n_elements=4), ex)
+    s = simulate(SpringModel(blk, Column(1e14, 2500.0), n_elements=4), ex, integrator=integrator)
     assert s.status == Status.ok
-    assert float(s.max_theta) == pytest.approx(qr, abs=1e-4)
+    assert float(s.max_theta) == pytest.approx(qr, abs=tol)
 
 
 def test_stiff_column_too_tight_tolerance_reports_max_steps():
