@@ -14,7 +14,7 @@ import jaxrock as jr
 from jaxrock.plotting import plot_boundaries, plot_spectra_grid
 
 ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-ap.add_argument("--n", type=int, default=12)
+ap.add_argument("--n", type=int, default=24, help="grid points per axis")
 ap.add_argument("--heights", default="10,50,100")
 ap.add_argument("--n-elements", type=int, default=10)
 ap.add_argument("--out", default="out/figures")

@@ -54,6 +54,7 @@ from .batch import read_scenes, run_scenes
 
 __all__ += ["read_scenes", "run_scenes"]
 
+from .generalized_alpha import GeneralizedAlpha
 from .spring import DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17, first_period_eq21, pushover_eq9
 from .calibration import CalibrationResult, calibrate_cbar, calibration_report, energy_ratio, fit_power_law, rm_target
 
@@ -61,6 +62,7 @@ __all__ += [
     "SpringModel",
     "Column",
     "SpringIntegrator",
+    "GeneralizedAlpha",
     "DEFAULT_SMOOTHING",
     "cbar_eq17",
     "first_period_eq21",

@@ -48,10 +48,10 @@ Rows whose models and excitations have the same structure (model kind; pulse kin
 record) form one group; the group's models *and* excitations are stacked and run with one `vmap`,
 in chunks of `chunk_size` rows padded to a power of two ≥ 8 (so few shapes are compiled).
 Geometry, pulse parameters, scale factors, damping and material values all vary freely within a
-group. Rigid groups are advanced in passes with the cells still running gathered between passes
-(as in `overturning_spectrum`). Results equal those of `simulate` row by row to the solver
-tolerance (rigid: ~1e-12; spring: ~1e-6, its rtol), not bitwise: the batch a row lands in can
-change the last digits.
+group. Rigid groups and flexible spring groups (generalized-α) are advanced in passes with the
+cells still running gathered between passes (as in `overturning_spectrum`). Results equal those
+of `simulate` row by row to the solver tolerance (rigid: ~1e-12; spring: its rtol), not bitwise:
+the batch a row lands in can change the last digits.
 """
 
 from __future__ import annotations

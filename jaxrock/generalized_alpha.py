@@ -133,30 +133,28 @@ class GeneralizedAlpha(AbstractIntegrator):
         def tol_of(q_a, q_b):
             return self.atol * scale + self.rtol * jnp.maximum(jnp.abs(q_a), jnp.abs(q_b))
 
-        def solve_theta(rhs, z0, x):
-            """θ with θ + z₀ M(θ) = rhs (monotone in θ; the root lies in [rhs − z₀ My, rhs + z₀ My]):
-            Newton from the current iterate `x`, kept inside the bracket (bisection otherwise)."""
-            span = z0 * My
-            lo, hi = rhs - span, rhs + span
-            x = jnp.clip(x, lo, hi)
+        def solve_theta(rhs, z0):
+            """θ with θ + z₀ M(θ) = rhs, i.e. u + k tanh u = r in u = θ/θs (k = z₀ My/θs ≥ 0,
+            r = rhs/θs; odd, so solved for |r|). f(u) = u + k tanh u − |r| is increasing and concave
+            for u ≥ 0, so Newton from any point left of the root climbs to it monotonically; both
+            |r| − k and |r|/(1 + k) lie left of it (f ≤ 0 there), and the larger is the start."""
+            k = z0 * My / theta_s
+            r = rhs / theta_s
+            ra = jnp.abs(r)
+            u = jnp.maximum(ra - k, ra / (1 + k))
 
             def cond(c):
-                x, lo, hi, dx, i = c
-                return (jnp.abs(dx) > _THETA_RTOL * (jnp.abs(x) + theta_s)) & (i < 100)
+                u, du, i = c
+                return (du > _THETA_RTOL * (u + 1.0)) & (i < 60)
 
             def body(c):
-                x, lo, hi, dx, i = c
-                th = jnp.tanh(x / theta_s)
-                g = x + z0 * My * th - rhs
-                dg = 1.0 + z0 * My / theta_s * (1 - th**2)
-                lo = jnp.where(g < 0, x, lo)
-                hi = jnp.where(g > 0, x, hi)
-                xn = x - g / dg
-                xn = jnp.where((xn > lo) & (xn < hi), xn, 0.5 * (lo + hi))
-                return xn, lo, hi, xn - x, i + 1
+                u, _, i = c
+                th = jnp.tanh(u)
+                step = (ra - u - k * th) / (1 + k * (1 - th * th))
+                return u + step, jnp.abs(step), i + 1
 
-            x, *_ = jax.lax.while_loop(cond, body, (x, lo, hi, jnp.asarray(jnp.inf, dtype), 0))
-            return x
+            u, *_ = jax.lax.while_loop(cond, body, (u, jnp.asarray(jnp.inf, dtype), 0))
+            return jnp.sign(r) * u * theta_s
 
         track = mech.track_energy
         y_init = mech.initial_state()  # [q, v] (+ [dissipated, input] when tracked)
@@ -194,7 +192,7 @@ class GeneralizedAlpha(AbstractIntegrator):
                 q1, _, i, _, r_prev = nc
                 R, aux = residual_parts(q1)
                 x = apply(R) * free
-                th_new = solve_theta(q1[0] - x[0], z0, q1[0]) if not clamp else q1[0]
+                th_new = solve_theta(q1[0] - x[0], z0) if not clamp else q1[0]
                 dq = -x - spring(th_new) * z
                 dq = dq.at[0].set(th_new - q1[0])
                 r = jnp.max(jnp.abs(dq) / tol_of(q, q1))

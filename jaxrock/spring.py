@@ -22,15 +22,19 @@ for a plain block), i.e. ``ΔI = I′o − (4/3) m h²`` spread evenly over the 
 
 Forces are gradients of energies (`jax.grad`), so the energy balance holds by construction.
 
-Time integration: flexible columns: diffrax ESDIRK (Kvaerno5 by default, L-stable: the
-E = 10¹⁴ Pa column is stiff) with full Newton stopped on its increment (see
-`SpringIntegrator.diffrax_solver`); the one-DOF quasi-rigid model: explicit Tsit5 (its pre-yield
-branch is only mildly stiff); integral step-size control with a component-scaled absolute
-tolerance. Events: overturning ``|θ| ≥ threshold·α′`` (root-found). The peak
-``max |θ|`` is exact to the solver tolerance: the base rotation and velocity are recorded at every
-accepted step and the cubic Hermite interpolant (θ, θ̇ at both ends, fourth-order accurate) is
-maximised in closed form on each step — cheaper than an event on θ̇ = 0 with restarts, and
-differentiable (no `while_loop` over segments, so `jax.grad` works).
+Time integration, chosen by work–precision (`SpringModel.default_integrator`,
+`benchmarks/bench_spring.py`): flexible columns: adaptive generalized-α (`GeneralizedAlpha`,
+`jaxrock.generalized_alpha`: the spring solved exactly as a scalar equation in each Newton
+iteration, the rest-state tangent rotated to the rocked configuration, step-size ladder with
+precomputed tangent inverses; forward-mode differentiable); the one-DOF quasi-rigid model:
+explicit Tsit5 (its pre-yield branch is only mildly stiff; reverse-mode differentiable). Either
+model takes either integrator; diffrax's ESDIRK (`SpringIntegrator(solver="kvaerno5")`, full
+Newton stopped on its increment) is the reverse-mode-differentiable choice for flexible columns.
+diffrax runs: integral step-size control with a component-scaled absolute tolerance; overturning
+``|θ| ≥ threshold·α′`` is an event. The peak ``max |θ|`` is exact to the solver tolerance: the
+base rotation and velocity at every accepted step give a cubic Hermite interpolant (θ, θ̇ at
+both ends, fourth-order accurate), maximised in closed form on each step (`jaxrock._peaks`) —
+cheaper than an event on θ̇ = 0 with restarts, and differentiable.
 
 Summary runs stop when the answer is fixed: phase 1 runs over the excitation window; phase 2 runs
 free motion until the mechanical energy falls below the potential at the largest rotation seen so

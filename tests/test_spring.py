@@ -358,6 +358,31 @@ def test_fixed_base_never_rotates():
     assert not bool(s.overturned)
 
 
+def test_chimney_rocking_cuts_base_moment():
+    """Paper section 6 (figure 17): the Christchurch chimney under El Centro 1940 NS (40 s), rocking
+    on its 7.5 m foundation vs fixed. The paper: max θ = 0.027 α′, base moment 7327 kNm rocking vs
+    33200 kNm fixed (ratio 0.22). Measured here (generalized-α 1e-7; Kvaerno5 1e-6 agrees to
+    0.1 %): 0.0281 α′ (4 % from the paper), 5398 vs 19491 kNm (ratio 0.28). Our fixed-base
+    moment is 41 % below the paper's (its damping and section data are not all given, see the
+    closing note of issue 3), so the test asserts what section 6 is about — rocking cuts the base
+    moment to well under half — and the rotation within 10 % of the paper's."""
+    A, I = 1.74, 2.99
+    blk = Block.from_size(32.65, math.sqrt(12 * I / A), base_width=7.5)
+    col = Column.concrete(A=A, I=I)
+    rec = jaxrock.el_centro()
+    ts = jnp.arange(0.0, float(rec.t_end) + 5.0, 0.01)
+    integ = GeneralizedAlpha(rtol=1e-7, atol=1e-7)
+    out = {}
+    for fixed in (False, True):
+        s = simulate(SpringModel(blk, col, fixed_base=fixed), rec, integrator=integ, save=Save(ts, ("base_moment",)))
+        assert s.status == Status.ok
+        out[fixed] = (float(s.max_theta), float(jnp.max(jnp.abs(s.history["base_moment"]))))
+    assert out[False][0] == pytest.approx(0.027, rel=0.1)
+    assert out[True][0] == 0.0
+    assert out[False][1] < 0.35 * out[True][1]
+    assert 15e6 < out[True][1] < 25e6  # 19.5 MNm: the fixed column's own response, 40 s of record
+
+
 # ----------------------------------------------------------------------------------------------
 # bad input
 # ----------------------------------------------------------------------------------------------
