@@ -187,8 +187,8 @@ def spectrum(
     batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into equal batches"),
     refine: int = typer.Option(10, min=0, max=40, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
     tol: Optional[float] = typer.Option(
-        None, help="spring models: run generalized-α at this local tolerance in (0, 1) (e.g. 1e-6: a quasi-rigid grid ~10x faster, "
-        "max error ~1e-2 in θ/α; see README); default: the model's default integrator"),
+        None, help="spring models: run generalized-α at this local tolerance in (0, 1) (e.g. 1e-6: a quasi-rigid pulse grid ~15x "
+        "faster, max error ~1e-2 in θ/α; see README); default: the model's default integrator"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
     """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""

@@ -245,16 +245,17 @@ class GeneralizedAlpha(AbstractIntegrator):
             s = step(c)
             k = c["k"]
             ok = s["err"] <= 1.0
-            # level after this attempt
+            # level after this attempt: double (one level up) when the error allows twice the step
+            # (0.9 err^(-1/3) ≥ 2), the step grid allows it and, during the excitation, dt stays
+            # within its step; on rejection drop as many levels as the error asks (≥ 1)
             grow = ok & (s["err"] < 0.125 / 1.5) & (k > 0)
             aligned = (s["n1"] % stride[jnp.maximum(k - 1, 0)]) == 0
-            in_exc = s["t1"] < t_end
-            k_floor = jnp.where(in_exc, j_exc, 0)
+            k_floor = jnp.where(s["t1"] < t_end, j_exc, 0)
             k_up = jnp.where(grow & aligned & (k - 1 >= k_floor), k - 1, k)
             shrink = jnp.ceil(jnp.log2(jnp.maximum(s["err"], 1.0)) / 3.0 + 0.2).astype(jnp.int32)
             k_dn = jnp.minimum(k + jnp.where(jnp.isfinite(s["err"]), jnp.maximum(shrink, 1), 2), K - 1)
             failed = (~ok) & (k == K - 1)
-            k_new = jnp.where(ok, jnp.maximum(k_up, jnp.where(in_exc, j_exc, 0)), k_dn)
+            k_new = jnp.where(ok, k_up, k_dn)
 
             # accepted-step bookkeeping
             t, t1 = c["t"], s["t1"]
@@ -295,7 +296,7 @@ class GeneralizedAlpha(AbstractIntegrator):
             )
             return dict(
                 peak=c["peak"], overturned=c["over"], t_overturn=c["t_over"], t_up=c["t_up"], status=status,
-                steps=c["steps"], history=c["hist"], t_last=c["t"], level=c["k"],
+                steps=c["steps"], history=c["hist"],
             )
 
         return carry, cond, body, result

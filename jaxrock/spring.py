@@ -575,14 +575,18 @@ class SpringModel(AbstractModel):
         Quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10 (32×32 pulse grid, tanα = 0.2: max error
         of max|θ|/α 2.4e-8 against Tsit5 at 1e-11, ~1.5–1.9 ms/scene; reverse-mode differentiable,
         which the calibration of c̄ needs). `GeneralizedAlpha(1e-6, 1e-6)` runs the same grid at
-        ~0.27 ms/scene with max error 7.4e-3 (median 7e-5): pass it for spectra where that suffices.
+        0.092 ms/scene with max error 8e-3 (median 1e-4; OpenSeesPy: 19 ms, 1.4e-2): pass it for
+        pulse spectra where that suffices — not for records, whose response hangs on resolving the
+        block's ringing on the stiff pre-yield spring before uplift (README).
 
         Flexible → `GeneralizedAlpha(1e-5, 1e-5)`, ρ∞ = 0.9 (8×8 grid of 2h = 50 m concrete
-        columns, 10 elements, error against generalized-α at 1e-9): 4.9 ms/scene, max error
-        3.7e-4 (median 5e-5); at 1e-4: 4.4 ms, 2.8e-3; at 1e-6: 9.3 ms, 1.5e-4. ρ∞ = 1 (the
-        trapezoidal rule) leaves the spring's impacts ringing in the stiff axial modes: 30–100×
-        more steps. diffrax's Kvaerno5 + Newton at 1e-6 (`SpringIntegrator()`) costs ~1.6 s/scene:
-        use it for reverse-mode gradients of a flexible column."""
+        columns, 10 elements, error against generalized-α at 1e-9, itself 4e-7 from Kvaerno5 at
+        1e-7): 4.2 ms/scene, max error 2.9e-4 (median 4e-5); at 1e-4: 2.8 ms, 2.1e-3; at 1e-6:
+        7.8 ms, 1.5e-4 (OpenSeesPy at T/400: 157 ms, 6.9e-3). ρ∞ = 1 (the trapezoidal rule)
+        leaves the spring's impacts ringing in the stiff axial modes: 30–100× more steps; ρ∞ =
+        0.8, 0.7, 0.5 cost 5–30 % more than 0.9 at equal error. diffrax's Kvaerno5 + Newton at 1e-6
+        (`SpringIntegrator()`) costs ~1.6 s/scene: use it for reverse-mode gradients of a
+        flexible column."""
         if self.column is None:
             return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5")
         return GeneralizedAlpha(rtol=1e-5, atol=1e-5)
