@@ -126,21 +126,6 @@ def test_simulate_prints_max_theta_of_simulate(tmp_path):
     assert png.stat().st_size > 1000
 
 
-def test_spectrum_tol_runs_generalized_alpha(tmp_path):
-    """`--tol` runs the spring model with generalized-α: the file equals the library's spectrum
-    with that integrator, cell for cell."""
-    out = tmp_path / "spec"
-    r = invoke("spectrum", "--model", "spring", "--n-omega", 2, "--n-accel", 3, "--omega-min", 2, "--omega-max", 6,
-               "--accel-min", 0.8, "--accel-max", 6, "--tol", 1e-6, "--refine", 0, "--out", out, "--quiet")
-    assert r.exit_code == 0, r.output
-    spec = Spectrum.load(tmp_path / "spec.nc")
-    model = jr.SpringModel(jr.Block.from_slenderness(10.0, 0.2))
-    ref = overturning_spectrum(model, np.linspace(2, 6, 2), np.linspace(0.8, 6, 3), integrator=jr.GeneralizedAlpha(1e-6, 1e-6),
-                               progress=False)
-    np.testing.assert_allclose(spec.max_theta, ref.max_theta, rtol=0, atol=1e-12)
-    np.testing.assert_array_equal(spec.overturned, ref.overturned)
-
-
 @pytest.mark.parametrize(
     "args, name",
     [
