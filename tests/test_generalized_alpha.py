@@ -301,10 +301,12 @@ def test_fixed_base_quasi_static_cantilever():
 
 def test_fixed_base_resonant_pulse_matches_kvaerno5():
     """A pulse at the column's first frequency (ω_p = 2π/T₁, eq. 21; a_p = g tanα): peak top
-    drift and base moment, GA default vs Kvaerno5 1e-6. Measured: peaks 0.66 % apart (GA 1e-7:
-    0.04 %; Kvaerno5 1e-6 vs 1e-8: 3e-6). The history itself differs from Kvaerno5 1e-8 by 1.5 %
-    of its peak at the default (GA 1e-7: 0.1 %; phase error: the displacement tolerance is scaled
-    by 2h α′ = 5 m, 60× the 8 cm drift). Bound 1.5 % on the peaks."""
+    drift and base moment, GA default vs Kvaerno5 1e-6, and the whole histories.
+
+    Measured: peaks 0.04 % apart, histories 0.12 % of the peak. (Before the fixed base's tolerance
+    was scaled by the column's static drift, `_Mechanics.atol_scale`, instead of the rocking
+    displacement 2h α′ = 5 m, 60× the 8 cm drift: peaks 0.66 %, histories 1.5 %.) Kvaerno5 1e-6 vs
+    1e-8: 3e-6. Bounds 0.2 % (peaks) and 0.5 % (histories)."""
     blk = FLEX_BLOCK
     T1 = float(first_period_eq21(blk.h, blk.tan_alpha, 30e9, 2500.0))
     ex = RickerPulse(G * float(blk.tan_alpha), 2 * math.pi / T1)
@@ -312,7 +314,9 @@ def test_fixed_base_resonant_pulse_matches_kvaerno5():
     _, R = _fixed_base_run(ex, KV6)
     assert np.all(H["theta"] == 0.0) and float(s.max_theta) == 0.0
     for f in ("u_top", "base_moment"):
-        assert np.max(np.abs(H[f])) == pytest.approx(np.max(np.abs(R[f])), rel=1.5e-2), f
+        peak = np.max(np.abs(R[f]))
+        assert np.max(np.abs(H[f])) == pytest.approx(peak, rel=2e-3), f
+        assert np.max(np.abs(H[f] - R[f])) < 5e-3 * peak, f
 
 
 # ----------------------------------------------------------------------------------------------
