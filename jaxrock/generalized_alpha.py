@@ -13,9 +13,9 @@ unconditionally stable, high-frequency dissipation set by ρ∞ (1: the trapezoi
 Newton on q₁ with three structural shortcuts, each exact or converging to the exact step:
 
 - the spring is solved exactly: with the rest of the system linearised, the step reduces to one
-  scalar, monotone equation in θ₁, ``θ₁ + z₀ M(θ₁) = r`` (z₀ > 0), solved by safeguarded Newton in
-  its bracket — so the pre-yield branch (stiffness My/θs, up to 10⁶ × the rocking stiffness) never
-  makes the iteration diverge, however large the step;
+  scalar, monotone equation in θ₁, ``θ₁ + z₀ M(θ₁) = r`` (z₀ > 0), solved by Newton from a point
+  where it converges monotonically — so the pre-yield branch (stiffness My/θs, up to 10⁶ × the
+  rocking stiffness) never makes the iteration diverge, however large the step;
 - the rest of the tangent is the rest state's (``K₀ + γ/(β dt) C₀ + (1−αm)/((1−αf) β dt²) M``),
   rotated rigidly to the current base rotation (``T(θ) K T(θ)ᵀ``, `_Mechanics.rotate`: exact for
   a rigidly rotated column, as the strain energy is rotation invariant): a quasi-Newton iteration

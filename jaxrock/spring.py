@@ -58,12 +58,12 @@ from jaxtyping import Array, Float
 
 from . import beam
 from ._validate import JaxrockInputError, check_nonnegative, check_positive, check_range
+from ._peaks import first_exceedance as _first_exceedance
+from ._peaks import hermite_peak as _hermite_peak
 from .excitation import AbstractExcitation
 from .generalized_alpha import GeneralizedAlpha
 from .geometry import G, Block
 from .model import AbstractIntegrator, AbstractModel
-from ._peaks import first_exceedance as _first_exceedance
-from ._peaks import hermite_peak as _hermite_peak
 from .results import Solution, Status
 
 # θs/α′ default from the work–precision study (16 quasi-rigid pulse scenes, tanα = 0.2, error of
@@ -800,7 +800,8 @@ class SpringModel(AbstractModel):
 
     def _run_alpha(self, mech, excitation, integrator, save, t1, thr):
         if save is None:
-            return finish(self, excitation, integrator, advance(self, excitation, integrator, start(self, excitation, integrator, t1), None, t1), t1)
+            c0, cond, body, result = self._alpha_summary(excitation, integrator, t1, mech)
+            return self._alpha_solution(result(jax.lax.while_loop(cond, body, c0)), thr)
         t_stop = save.ts[-1] if t1 is None else t1
         out = integrator.integrate(mech, excitation, t_stop, thr=self._alpha_threshold(thr), save_ts=save.ts, fields=save.fields)
         return self._alpha_solution(out, thr, save.ts)
@@ -808,9 +809,9 @@ class SpringModel(AbstractModel):
     def _alpha_threshold(self, thr):
         return jnp.inf if self.fixed_base else thr
 
-    def _alpha_summary(self, excitation, integrator, t1):
+    def _alpha_summary(self, excitation, integrator, t1, mech=None):
         """The generalized-α step loop of a summary run (stops when the answer is fixed)."""
-        mech = self.mechanics()
+        mech = self.mechanics() if mech is None else mech
         thr = self._alpha_threshold(self.threshold * self.block.alpha_r)
         t_stop = self._summary_end(mech, excitation, t1)
         return integrator.machinery(mech, excitation, t_stop, thr=thr, settle_margin=self._settle_margin(mech))
