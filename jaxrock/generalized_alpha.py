@@ -263,12 +263,13 @@ class GeneralizedAlpha(AbstractIntegrator):
             om0, om1 = c["v"][0], s["v1"][0]
             pk = hermite_peak(jnp.stack([t, t1]), jnp.stack([th0, th1]), jnp.stack([om0, om1]))
             peak = jnp.maximum(c["peak"], pk)
+            a0, a1 = jnp.abs(th0), jnp.abs(th1)
+            rise = jnp.where(a1 > a0, a1 - a0, 1.0)
+            crossing = lambda level: t + jnp.clip((level - a0) / rise, 0.0, 1.0) * (t1 - t)  # |θ| = level, linear
             over = pk >= thr
-            frac = jnp.clip((thr - jnp.abs(th0)) / jnp.where(jnp.abs(th1) > jnp.abs(th0), jnp.abs(th1) - jnp.abs(th0), 1.0), 0.0, 1.0)
-            t_over = t + frac * (t1 - t)
-            up_now = jnp.isinf(c["t_up"]) & (jnp.abs(th1) > theta_up)
-            frac_up = jnp.clip((theta_up - jnp.abs(th0)) / jnp.where(jnp.abs(th1) > jnp.abs(th0), jnp.abs(th1) - jnp.abs(th0), 1.0), 0.0, 1.0)
-            t_up = jnp.where(up_now, t + frac_up * (t1 - t), c["t_up"])
+            t_over = crossing(thr)
+            up_now = jnp.isinf(c["t_up"]) & (a1 > theta_up)
+            t_up = jnp.where(up_now, crossing(theta_up), c["t_up"])
             dt = s["dt"]
             ew = c["ew"] + 0.5 * dt * jnp.stack([c["v"] @ c["fd"] + s["v1"] @ s["fd1"], c["v"] @ c["fe"] + s["v1"] @ s["fe1"]])
             finished = over | (t1 >= t_stop)

@@ -4,8 +4,8 @@ In these coordinates the rigid spectrum depends on α′ only (SPEC "Spectra"). 
 batches of `batch_size` cells (memory stays bounded); for the rigid model and generalized-α
 spring runs each batch is advanced in passes of a few loop iterations and the cells still running
 are gathered into a smaller batch between passes, so that a few long cells (chattering near the
-uplift line, rocking near the overturning line) do not make the whole batch wait for them. A `checkpoint` file keeps finished batches: an interrupted run resumes where it
-stopped.
+uplift line, rocking near the overturning line) do not make the whole batch wait for them. A
+`checkpoint` file keeps finished batches: an interrupted run resumes where it stopped.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import rigid, spring
+from . import beam, rigid, spring
 from .generalized_alpha import GeneralizedAlpha
 from ._validate import JaxrockInputError, check_grid
 from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
@@ -138,7 +138,7 @@ def _memory_batch(model, integ, budget_bytes: int = 2**29) -> int:
     integ = model.default_integrator() if integ is None else integ
     if not isinstance(integ, GeneralizedAlpha) or not isinstance(model, spring.SpringModel) or model.column is None:
         return 2**62
-    N = 3 * model.n_elements + 1
+    N = beam.n_dof(model.n_elements)
     return max(64, budget_bytes // (integ.levels * N * N * 8))
 
 
@@ -186,12 +186,12 @@ def _compacted_batch(mod, passes, budget, smallest, model, excitations, integ, m
     dyn_m, static_m = eqx.partition(model, eqx.is_array)
     dyn_e, dyn_m = tree_np(dyn_e), tree_np(dyn_m)
     carry = tree_np(_start(mod, model, integ, excitations, model_batched))
-    used, n_pass = 0, passes[0]
+    used, k = 0, 0
     while used < budget:
         todo = np.flatnonzero(~np.asarray(mod.is_finished(carry)))
         if todo.size == 0:
             break
-        n_pass = min(n_pass, budget - used)
+        n_pass = min(passes[k], budget - used)
         size = _bucket(todo.size, n, smallest)
         for lo in range(0, todo.size, size):
             idx = todo[lo : lo + size]
@@ -207,7 +207,7 @@ def _compacted_batch(mod, passes, budget, smallest, model, excitations, integ, m
 
             carry = jax.tree_util.tree_map(put, carry, sub_c)
         used += n_pass
-        n_pass = passes[min(passes.index(n_pass) + 1, len(passes) - 1)] if n_pass in passes else n_pass
+        k = min(k + 1, len(passes) - 1)
     return _finish(mod, model, integ, excitations, carry, model_batched)
 
 
