@@ -35,6 +35,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from . import _linalg
 from .geometry import G
 
 
@@ -144,10 +145,10 @@ def first_period(h, n: int, m, EA, EI, rot_masses):
     material stiffness, no gravity): the reference of eq. 21 and of the Rayleigh damping."""
     K = linear_stiffness(h, n, EA, EI)[1:, 1:]
     M = mass_matrix(h, n, m, rot_masses)[1:, 1:]
-    Lc = jnp.linalg.cholesky(M)
-    Li = jax.scipy.linalg.solve_triangular(Lc, jnp.eye(M.shape[0]), lower=True)
+    Lc = _linalg.cholesky(M)
+    Li = _linalg.solve_triangular(Lc, jnp.eye(M.shape[0]))
     A = Li @ K @ Li.T
-    w2 = jnp.linalg.eigvalsh(0.5 * (A + A.T))[0]
+    w2 = _linalg.eigvalsh(0.5 * (A + A.T))[0]
     return 2 * jnp.pi / jnp.sqrt(w2)
 
 

@@ -35,6 +35,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from . import _linalg
 from ._peaks import hermite_peak
 from ._validate import JaxrockInputError
 from .model import AbstractIntegrator
@@ -125,7 +126,7 @@ class GeneralizedAlpha(AbstractIntegrator):
                 Kb = Kb * free[:, None] * free[None, :] + jnp.diag(1.0 - free)
             return Kb
 
-        Kinv = jnp.linalg.inv(jax.vmap(k_eff)(dts))  # (K, N, N)
+        Kinv = _linalg.inv(jax.vmap(k_eff)(dts))  # (K, N, N)
         scale = mech.atol_scale()[:N]
         My, theta_s = mech.My, mech.theta_s
         spring = (lambda th: jnp.zeros_like(th)) if clamp else mech.spring_moment
@@ -161,7 +162,7 @@ class GeneralizedAlpha(AbstractIntegrator):
         q0, v0 = y_init[:N], y_init[N : 2 * N]
         f0_rest, f0_ext, f0_damp = mech.forces_without_spring(t0, q0, v0, excitation)
         f0_tot = f0_rest - spring(q0[0]) * e0
-        a0 = jnp.linalg.solve(M * free[:, None] * free[None, :] + jnp.diag(1.0 - free), f0_tot * free)
+        a0 = _linalg.solve(M * free[:, None] * free[None, :] + jnp.diag(1.0 - free), f0_tot * free)
 
         def step(c):
             """One attempted step from the carry's state at level k."""

@@ -56,7 +56,7 @@ import optimistix as optx
 from diffrax import with_stepsize_controller_tols
 from jaxtyping import Array, Float
 
-from . import beam
+from . import _linalg, beam
 from ._validate import JaxrockInputError, check_nonnegative, check_positive, check_range
 from ._peaks import first_exceedance as _first_exceedance
 from ._peaks import hermite_peak as _hermite_peak
@@ -441,9 +441,9 @@ class SpringIntegrator(AbstractIntegrator):
         if self.explicit:
             return _EXPLICIT[self.solver]()
         if self.root_finder == "newton":
-            rf = optx.Newton(rtol=self.rtol, atol=self.atol, cauchy_termination=False)
+            rf = optx.Newton(rtol=self.rtol, atol=self.atol, cauchy_termination=False, linear_solver=_linalg.SequentialLU())
         else:
-            rf = with_stepsize_controller_tols(diffrax.VeryChord)()
+            rf = with_stepsize_controller_tols(diffrax.VeryChord)(linear_solver=_linalg.SequentialLU())
         return _IMPLICIT[self.solver](root_finder=rf)
 
     def controller(self, mech: _Mechanics, excitation: AbstractExcitation, dtmax=None):
@@ -648,7 +648,7 @@ class SpringModel(AbstractModel):
             le = 2 * blk.h / n
             rot = self.column.rho * I * le * jnp.concatenate([jnp.full(1, 0.5), jnp.ones(n - 1), jnp.full(1, 0.5)])
         M = beam.mass_matrix(blk.h, n, m, rot)
-        Minv = jnp.linalg.inv(M)
+        Minv = _linalg.inv(M)
         Minv = 0.5 * (Minv + Minv.T)
         T1 = beam.first_period(blk.h, n, m, EA, EI, rot)
         a1 = self.zeta * T1 / jnp.pi  # stiffness-proportional: ζ = a₁ ω₁/2
@@ -662,13 +662,13 @@ class SpringModel(AbstractModel):
         for _ in range(3):
             g_ = grad_v(q) * free
             H = hess_v(q) * free[:, None] * free[None, :] + jnp.diag(1.0 - free)
-            q = q - jnp.linalg.solve(H, g_)
+            q = q - _linalg.solve(H, g_)
         V_eq = mech._column_potential(q)
         mech = eqx.tree_at(lambda mm: (mm.q_eq, mm.V_eq), mech, (q, V_eq))
         if self.fixed_base:
             # static drift of the clamped column under a lateral m g tanα′ (its mass distribution)
             K = beam.linear_stiffness(blk.h, n, EA, EI)[1:, 1:]
-            u = jnp.linalg.solve(K, mech.r[1:] * G * jnp.tan(blk.alpha_r))
+            u = _linalg.solve(K, mech.r[1:] * G * jnp.tan(blk.alpha_r))
             drift = jnp.abs(beam.top_displacement(jnp.concatenate([jnp.zeros(1), u]), blk.h, n))
             mech = eqx.tree_at(lambda mm: mm.deform_scale, mech, drift / (2 * blk.h * blk.alpha_r))
         return mech
