@@ -323,7 +323,11 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         mode = jnp.where(hit_over, _OVERTURNED, jnp.where(zeno, _REST, c.mode))
         no_event = ~(hit_impact | hit_apex | hit_over)
         bad = status != Status.ok
-        finished = c.finished | hit_over | bad | (is_rocking & no_event & ~chunked & (tf >= t_seg))
+        seg_done = is_rocking & no_event & ~chunked & (tf >= t_seg)
+        # A summary segment that reaches the end of the excitation goes on exactly when its free
+        # motion overturns (the same test `segment_end` makes at the start of the next segment).
+        free_overturns = summary_only & (c.t < t_end) & (tf >= t_end) & (model.free_peak(thf, omf, c.side) >= thr)
+        finished = c.finished | hit_over | bad | (seg_done & ~free_overturns)
         out = eqx.tree_at(
             lambda x: (x.t, x.theta, x.omega, x.side, x.mode, x.peak, x.n_impacts, x.dt_next, x.status, x.t_overturn, x.finished, x.hist),
             c,
