@@ -54,6 +54,8 @@ import openseespy.opensees as ops
 G = 9.81
 DEFAULT_SMOOTHING = 1e-4  # θs/α′, jaxrock.spring.DEFAULT_SMOOTHING
 X_PULSE = 8.0  # pulse window ω_p t ∈ [−X, X]
+_X_PEAK = math.sqrt(9 - math.sqrt(54))  # where the antisymmetric shape of eq. 29 peaks
+ANTI_BETA = abs((_X_PEAK**2 / 3 - 3) * (_X_PEAK / math.sqrt(3)) * math.exp(-(_X_PEAK**2) / 6))  # β ≈ 1.38011905
 
 
 # ----------------------------------------------------------------------------------------------
@@ -265,7 +267,7 @@ def run_pulse(sc: Scene, a_p, omega_p, *, steps_per_period=400, history=False, t
     ts = t_start + np.arange(ns) * (dt / 4)
     if antisymmetric:
         x = omega_p * ts
-        ug = a_p * (x**2 / 3 - 3) * (x / math.sqrt(3)) * np.exp(-(x**2) / 6) / 1.3801
+        ug = a_p * (x**2 / 3 - 3) * (x / math.sqrt(3)) * np.exp(-(x**2) / 6) / ANTI_BETA
     else:
         ug = ricker(a_p, omega_p, ts)
     ops.timeSeries("Path", 3, "-dt", dt / 4, "-values", *ug.tolist())

@@ -150,15 +150,19 @@ def _ricker_sym(x):
     return (1 - x**2 / 2) * jnp.exp(-(x**2) / 4)
 
 
-_BETA = 1.3801  # SPEC eq. 29
-
-
-def _ricker_anti(x):
-    return (x**2 / 3 - 3) * (x / math.sqrt(3)) * jnp.exp(-(x**2) / 6) / _BETA
+def _ricker_anti_unscaled(x, exp=jnp.exp):
+    return (x**2 / 3 - 3) * (x / math.sqrt(3)) * exp(-(x**2) / 6)
 
 
 _S6, _S2 = math.sqrt(6.0), math.sqrt(2.0)
-_A1, _A2 = math.sqrt(9 - math.sqrt(54)), math.sqrt(9 + math.sqrt(54))  # extrema of eq. 29
+# extrema of eq. 29: d/dx of the unscaled shape vanishes where x⁴ − 18x² + 27 = 0
+_A1, _A2 = math.sqrt(9 - math.sqrt(54)), math.sqrt(9 + math.sqrt(54))
+# β of eq. 29 (rounded to 1.3801 in the paper) is the unscaled peak, so that max |üg| = a_p exactly
+_BETA = max(abs(_ricker_anti_unscaled(x, math.exp)) for x in (_A1, _A2))
+
+
+def _ricker_anti(x):
+    return _ricker_anti_unscaled(x) / _BETA
 
 
 def _as_float(x):
@@ -179,7 +183,7 @@ class RickerPulse(AbstractRicker):
 
 
 class AntisymmetricRickerPulse(AbstractRicker):
-    """Antisymmetric Ricker pulse, eq. 29: üg = (a_p/β)(ω_p²t²/3 − 3)(ω_p t/√3) exp(−ω_p²t²/6), β = 1.3801."""
+    """Antisymmetric Ricker pulse, eq. 29: üg = (a_p/β)(ω_p²t²/3 − 3)(ω_p t/√3) exp(−ω_p²t²/6), β = 1.38011905… (max |üg| = a_p)."""
 
     a_p: Float[Array, ""] = eqx.field(converter=_as_float)
     omega_p: Float[Array, ""] = eqx.field(converter=_as_float)

@@ -223,3 +223,24 @@ def test_unknown_units(tmp_path):
     path = _write(tmp_path, "u.txt", "0 0.1\n0.01 0.2\n")
     with pytest.raises(JaxrockInputError, match=r"units = 'cm/s2' .*valid units are \['g', 'm/s2'\]"):
         read_two_column(path, units="cm/s2")
+
+
+# --- pulses -------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("pulse", ["symmetric", "antisymmetric"])
+def test_pulse_peak_is_exactly_a_p(pulse):
+    """max |üg| = a_p (SPEC; eq. 29's β is the unscaled peak, 1.3801 in the paper rounded): the
+    peak is located by a bounded scalar search on the pulse itself, and a dense scan never exceeds it."""
+    from scipy.optimize import minimize_scalar
+
+    from jaxrock import AntisymmetricRickerPulse, RickerPulse
+
+    a_p, omega_p = 2.345, 3.7
+    exc = (RickerPulse if pulse == "symmetric" else AntisymmetricRickerPulse)(a_p, omega_p)
+    f = lambda t: -abs(float(exc(t)))
+    bracket = (-0.5 / omega_p, 0.5 / omega_p) if pulse == "symmetric" else (0.5 / omega_p, 2.5 / omega_p)
+    peak = -minimize_scalar(f, bounds=bracket, method="bounded", options={"xatol": 1e-12}).fun
+    assert abs(peak - a_p) <= 1e-14 * a_p
+    ts = jnp.linspace(exc.t_start, exc.t_end, 2_000_001)
+    assert float(jnp.max(jnp.abs(exc(ts)))) <= a_p * (1 + 1e-15)
