@@ -2,8 +2,8 @@
 
 Every excitation gives the horizontal ground acceleration üg(t) [m/s²], the window
 [`t_start`, `t_end`] outside which it is negligible (pulses) or zero (records), and
-`next_exceedance(t, level)`: the first time ≥ t at which |üg| exceeds `level` — the uplift time of
-a body at rest (exact: pulses are split into pieces on which |üg| is monotone; records are
+`next_exceedance(t, level)`: the first time ≥ t at which |üg| exceeds `level` strictly — the uplift
+time of a body at rest, which stays at rest while |üg| ≤ g tanα (SPEC) (exact: pulses are split into pieces on which |üg| is monotone; records are
 piecewise linear between samples). Excitations are passed to the solvers as arguments, never
 closed over, so a batch of them can be `vmap`ped and differentiated.
 """
@@ -54,7 +54,9 @@ class AbstractExcitation(eqx.Module):
 
     @abc.abstractmethod
     def next_exceedance(self, t, level) -> Float[Array, ""]:
-        """First time τ ≥ t with |üg(τ)| ≥ level (τ = t if it already exceeds); +inf if none."""
+        """First time τ ≥ t with |üg(τ)| > level (τ = t if it already exceeds); +inf if none.
+
+        Strict: a pulse or record whose peak is exactly the level never exceeds it."""
 
 
 def _implicit_time(f, tau, level):
@@ -122,13 +124,13 @@ class AbstractRicker(AbstractExcitation):
         valid = hi > x_now
         flo = jnp.abs(self.shape(lo))
         fhi = jnp.abs(self.shape(hi))
-        already = valid & (flo >= ell)
-        inside = valid & ~already & (fhi >= ell)
+        already = valid & (flo > ell)
+        inside = valid & ~already & (fhi > ell)
 
         def bisect(_, ab):
             a, b = ab
             m = 0.5 * (a + b)
-            up = jnp.abs(self.shape(m)) >= ell
+            up = jnp.abs(self.shape(m)) > ell
             return jnp.where(up, a, m), jnp.where(up, m, b)
 
         a, b = jax.lax.fori_loop(0, _BISECTIONS, bisect, (lo, hi))
@@ -146,8 +148,10 @@ class AbstractRicker(AbstractExcitation):
         return jnp.where(found, tau, jnp.inf)
 
 
+# Both shapes are clipped to [−1, 1] (a no-op but for round-off at the peak), so that a pulse whose
+# a_p is exactly g tanα never exceeds the uplift level (the strict test of `next_exceedance`).
 def _ricker_sym(x):
-    return (1 - x**2 / 2) * jnp.exp(-(x**2) / 4)
+    return jnp.clip((1 - x**2 / 2) * jnp.exp(-(x**2) / 4), -1.0, 1.0)
 
 
 def _ricker_anti_unscaled(x, exp=jnp.exp):
@@ -162,7 +166,7 @@ _BETA = max(abs(_ricker_anti_unscaled(x, math.exp)) for x in (_A1, _A2))
 
 
 def _ricker_anti(x):
-    return _ricker_anti_unscaled(x) / _BETA
+    return jnp.clip(_ricker_anti_unscaled(x) / _BETA, -1.0, 1.0)
 
 
 def _as_float(x):
@@ -289,9 +293,9 @@ class Record(AbstractExcitation):
         t = jnp.asarray(t, dtype=float)
         a = jnp.abs(self.scale * self.acc)
         ts = self.times
-        now = jnp.abs(self(t)) >= level
-        # first sample strictly after t that reaches the level
-        hit = (ts > t) & (a >= level)
+        now = jnp.abs(self(t)) > level
+        # first sample strictly after t that exceeds the level
+        hit = (ts > t) & (a > level)
         k = jnp.argmax(hit)
         found = jnp.any(hit)
         # crossing of s·üg = level on the linear piece from max(t, t_{k-1}) to t_k, s = sign(üg_k)

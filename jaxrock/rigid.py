@@ -231,6 +231,10 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
     def active(c: _Carry):
         return ~c.finished
 
+    def min_step(t):
+        """Smallest step: 1e-8/p, but resolvable at time t in this precision."""
+        return jnp.maximum(1e-8 / p, 64 * eps * (jnp.abs(t) + 1 / p))
+
     def rest_step(c: _Carry) -> _Carry:
         t_up = exc.next_exceedance(c.t, level)
         starts = t_up < t_stop
@@ -259,8 +263,7 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         t_seg = jnp.where(is_rocking, segment_end(c), c.t)
         acc0 = model.acceleration(c.t, c.theta, c.side, exc)
         at_zero = c.theta == 0
-        # smallest first step: 1e-8/p, but resolvable at the current time in this precision
-        dt_min = jnp.maximum(1e-8 / p, 64 * eps * (jnp.abs(c.t) + 1 / p))
+        dt_min = min_step(c.t)
         dt_flight = 0.05 * jnp.abs(c.omega) / jnp.maximum(jnp.abs(acc0), tiny)
         dt0 = jnp.where(at_zero, jnp.clip(dt_flight, dt_min, h_nom), h_nom)
         dt0 = jnp.where(c.dt_next > 0, c.dt_next, dt0)
@@ -285,11 +288,18 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         thf, omf = sol.ys[0][-1], sol.ys[1][-1]
         hit_over, hit_apex, hit_impact = sol.event_mask
         hit_impact, hit_apex, hit_over = (hit_impact & is_rocking, hit_apex & is_rocking, hit_over & is_rocking)
+        # A grazing uplift: |üg| a hair above g tanα′ while the rounded moment about the corner
+        # turns the fresh block (θ = θ̇ = 0) into the ground; the impact event cannot see a
+        # crossing from exactly 0. It counts as an uplift (|üg| exceeded the level) that returns to
+        # rest at once, and the next exceedance is searched a resolvable instant later (the
+        # window may hold a real uplift): never a failure.
+        fresh = (c.theta == 0) & (c.omega == 0)
+        back_to_rest = is_rocking & fresh & ~hit_impact & ~hit_over & (c.side * thf <= 0)
         chunked = is_rocking & ~(hit_impact | hit_apex | hit_over) & (tf < t_seg)
         n_acc = jnp.maximum(sol.stats["num_accepted_steps"], 1)
-        dt_next = jnp.where(chunked, jnp.maximum((tf - c.t) / n_acc, dt_min), 0.0)
+        dt_next = jnp.where(chunked & ~back_to_rest, jnp.maximum((tf - c.t) / n_acc, dt_min), 0.0)
         status = _event_status(sol.result)
-        missed = is_rocking & ~hit_impact & (c.side * thf < -1e-6 * alpha)
+        missed = is_rocking & ~hit_impact & ~back_to_rest & (c.side * thf < -1e-6 * alpha)
         status = Status.where(missed, Status.missed_impact, status)
         status = Status.where(is_rocking, status, Status.ok)
 
@@ -297,7 +307,7 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         if hist is not None:
             inwin = is_rocking & (save.ts >= c.t) & (save.ts <= tf)
             ys = jax.vmap(sol.evaluate)(jnp.clip(save.ts, c.t, tf))
-            new = {"theta": ys[0], "omega": ys[1]}
+            new = {"theta": jnp.where(back_to_rest, 0.0, ys[0]), "omega": jnp.where(back_to_rest, 0.0, ys[1])}
             hist = {k: jnp.where(inwin, new[k], v) for k, v in hist.items()}
             # after overturning, hold the overturning state (the fall itself is not modelled)
             after = hit_over & (save.ts > tf)
@@ -315,24 +325,25 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         t_zeno = 2 * v / (1 - eta**2 + tiny) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
         zeno = hit_impact & both & ((t_zeno * p <= integ.zeno_time) | (v <= integ.zeno_velocity * p * alpha))
 
-        peak = jnp.where(hit_apex | (not summary_only), jnp.maximum(c.peak, jnp.abs(thf) / alpha), c.peak)
+        peak = jnp.where((hit_apex | (not summary_only)) & ~back_to_rest, jnp.maximum(c.peak, jnp.abs(thf) / alpha), c.peak)
         peak = jnp.where(hit_over, thr, peak)
-        theta_new = jnp.where(hit_impact, 0.0, thf)
-        omega_new = jnp.where(hit_impact, jnp.where(zeno, 0.0, omega_imp), jnp.where(hit_apex, 0.0, omf))
+        theta_new = jnp.where(hit_impact | back_to_rest, 0.0, thf)
+        omega_new = jnp.where(hit_impact, jnp.where(zeno, 0.0, omega_imp), jnp.where(hit_apex | back_to_rest, 0.0, omf))
         side_new = jnp.where(hit_impact, side_imp, c.side)
-        mode = jnp.where(hit_over, _OVERTURNED, jnp.where(zeno, _REST, c.mode))
+        mode = jnp.where(hit_over, _OVERTURNED, jnp.where(zeno | back_to_rest, _REST, c.mode))
+        t_new = jnp.where(back_to_rest, c.t + min_step(c.t), tf)
         no_event = ~(hit_impact | hit_apex | hit_over)
         bad = status != Status.ok
         seg_done = is_rocking & no_event & ~chunked & (tf >= t_seg)
         # A summary segment that reaches the end of the excitation goes on exactly when its free
         # motion overturns (the same test `segment_end` makes at the start of the next segment).
         free_overturns = summary_only & (c.t < t_end) & (tf >= t_end) & (model.free_peak(thf, omf, c.side) >= thr)
-        finished = c.finished | hit_over | bad | (seg_done & ~free_overturns)
+        finished = c.finished | hit_over | bad | (seg_done & ~free_overturns & ~back_to_rest)
         out = eqx.tree_at(
             lambda x: (x.t, x.theta, x.omega, x.side, x.mode, x.peak, x.n_impacts, x.dt_next, x.status, x.t_overturn, x.finished, x.hist),
             c,
             (
-                jnp.where(is_rocking, tf, c.t),
+                jnp.where(is_rocking, t_new, c.t),
                 jnp.where(is_rocking, theta_new, c.theta),
                 jnp.where(is_rocking, omega_new, c.omega),
                 jnp.where(is_rocking, side_new, c.side),
