@@ -58,6 +58,15 @@ class Spectrum(eqx.Module):
         first = np.argmax(mask, axis=0)
         return np.where(has, self.accel_ratio[first], np.nan)
 
+    def contradictions(self) -> np.ndarray:
+        """Cells whose result contradicts its own flags (none, in a correct run): max_theta at the
+        threshold without overturning, overturned with another max_theta, or overturned without
+        uplifting. Failed cells (status ≠ ok) are not judged."""
+        thr = float(self.attrs.get("threshold", 1.0))
+        over = self.overturned
+        bad = ((self.max_theta >= thr) & ~over) | (over & (self.max_theta != thr)) | (over & ~self.uplifted)
+        return bad & (self.status == 0)
+
     @property
     def uplift_boundary(self) -> np.ndarray:
         """Least a_p/(g tanα′) that uplifts, per ω_p/p′ column: refined if `uplift_line` is there,
@@ -302,6 +311,7 @@ def overturning_spectrum(
     attrs = {
         "model": type(model).__name__,
         "pulse": cls.__name__,
+        "threshold": float(model.threshold),
         "tan_alpha": tan_a,
         "alpha": float(block.alpha_r),
         "p": p,
