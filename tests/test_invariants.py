@@ -132,31 +132,29 @@ RIGID_TOL = dict(theta_tol=1e-9, t_tol=1e-7)
 SPRING_TOL = dict(theta_tol=1e-7, t_tol=1e-6)
 
 
-@pytest.mark.parametrize("pulse", PULSES)
-def test_rigid_summary_agrees_with_history(pulse):
-    s, h = run_both(rigid_model, pulse, random_scenes(160, seed=11 if pulse == "symmetric" else 12))
-    assert_summary_matches_history(s, h, **RIGID_TOL)
+# model kind -> (model, tolerances, scenes per vmapped batch)
+KINDS = {"rigid": (rigid_model, RIGID_TOL, 160), "quasi_rigid_sm": (spring_model, SPRING_TOL, 32)}
+
+
+def check_random_scenes(kind: str, pulse: str, seed: int):
+    make_model, tol, n = KINDS[kind]
+    s, h = run_both(make_model, pulse, random_scenes(n, seed=seed))
+    assert_summary_matches_history(s, h, **tol)
 
 
 @pytest.mark.parametrize("pulse", PULSES)
-def test_quasi_rigid_spring_summary_agrees_with_history(pulse):
-    s, h = run_both(spring_model, pulse, random_scenes(32, seed=21 if pulse == "symmetric" else 22))
-    assert_summary_matches_history(s, h, **SPRING_TOL)
+@pytest.mark.parametrize("kind", KINDS)
+def test_summary_agrees_with_history(kind, pulse):
+    check_random_scenes(kind, pulse, seed=10 * list(KINDS).index(kind) + list(PULSES).index(pulse))
 
 
-# slow: 4160 rigid and 960 quasi-rigid SM scenes, in vmapped chunks of the default sizes above
-# (one compiled program per kind and pulse; a chunk is one test, well inside the per-test limit)
+# slow: 4160 rigid and 960 quasi-rigid SM scenes more, in batches of the default sizes (one
+# compiled program per kind and pulse; each batch is one test, well inside the per-test limit)
+SLOW_BATCHES = [("rigid", k) for k in range(13)] + [("quasi_rigid_sm", k) for k in range(15)]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("chunk", range(13))
 @pytest.mark.parametrize("pulse", PULSES)
-def test_rigid_summary_agrees_with_history_many(pulse, chunk):
-    s, h = run_both(rigid_model, pulse, random_scenes(160, seed=1000 + 2 * chunk + (pulse == "symmetric")))
-    assert_summary_matches_history(s, h, **RIGID_TOL)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("chunk", range(15))
-@pytest.mark.parametrize("pulse", PULSES)
-def test_quasi_rigid_spring_summary_agrees_with_history_many(pulse, chunk):
-    s, h = run_both(spring_model, pulse, random_scenes(32, seed=2000 + 2 * chunk + (pulse == "symmetric")))
-    assert_summary_matches_history(s, h, **SPRING_TOL)
+@pytest.mark.parametrize("kind,batch", SLOW_BATCHES)
+def test_summary_agrees_with_history_many(kind, batch, pulse):
+    check_random_scenes(kind, pulse, seed=1000 + 100 * list(KINDS).index(kind) + 2 * batch + list(PULSES).index(pulse))

@@ -54,7 +54,7 @@ def test_eight_batched_inverses_do_not_hang():
     assert float(out.split()[-1]) < 1e-12
 
 
-@pytest.mark.parametrize("integrator", ["ga", "kvaerno5"])
+@pytest.mark.parametrize("integrator", ["ga", pytest.param("kvaerno5", marks=pytest.mark.slow)])  # kvaerno5: 70 s
 def test_vmapped_flexible_runs_do_not_hang(integrator):
     """`jit(vmap(simulate))` of the flexible spring model over 16 varied scenes: mass inverse,
     preload solves, first period, generalized-α's tangent ladder (default) or the ESDIRK stage
