@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import abc
 
+import diffrax
 import equinox as eqx
 import jax.numpy as jnp
 
@@ -18,8 +19,24 @@ from .geometry import Block
 from .results import Save, Solution
 
 
+AUTODIFF_MODES = ("reverse", "forward")
+
+
 class AbstractIntegrator(eqx.Module):
     """Numerical settings of a model's time integration (tolerances, bounds)."""
+
+
+def check_autodiff(autodiff: str):
+    if autodiff not in AUTODIFF_MODES:
+        raise JaxrockInputError(f"autodiff = {autodiff!r}; valid: {AUTODIFF_MODES}")
+
+
+def diffrax_adjoint(autodiff: str) -> diffrax.AbstractAdjoint:
+    """diffrax's adjoint for an integrator's `autodiff` mode: `"reverse"` (`jax.grad`, `jax.vjp`,
+    `jax.jacrev`; recursive checkpointing) or `"forward"` (`jax.jvp`, `jax.jacfwd`; plain loops, no
+    stored trajectory). JAX cannot run forward mode through a reverse-mode loop (a `custom_vjp`),
+    nor the reverse, so the mode is chosen with the integrator."""
+    return diffrax.ForwardMode() if autodiff == "forward" else diffrax.RecursiveCheckpointAdjoint()
 
 
 class AbstractModel(eqx.Module):

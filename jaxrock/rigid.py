@@ -43,7 +43,7 @@ from ._rootfind import SafeNewton
 from ._validate import check_range
 from .excitation import AbstractExcitation
 from .geometry import G, Block
-from .model import AbstractIntegrator, AbstractModel
+from .model import AbstractIntegrator, AbstractModel, check_autodiff, diffrax_adjoint
 from .results import Save, Solution, Status
 
 _REST, _ROCKING, _OVERTURNED = 0, 1, 2
@@ -68,6 +68,8 @@ class EventIntegrator(AbstractIntegrator):
       event, which may be a rejected step.
     - `max_steps`: bound on steps per window; `max_iterations`: bound on loop iterations
       (segments + windows) per run; hitting either is reported as a `Status`.
+    - `autodiff`: `"reverse"` (default: `jax.grad`, `jax.jacrev`) or `"forward"` (`jax.jvp`,
+      `jax.jacfwd`); see `model.diffrax_adjoint`.
     """
 
     solver: diffrax.AbstractSolver = diffrax.Tsit5()
@@ -79,6 +81,10 @@ class EventIntegrator(AbstractIntegrator):
     chunk_steps: int = 16
     max_steps: int = eqx.field(static=True, default=4096)
     max_iterations: int = eqx.field(static=True, default=100_000)
+    autodiff: str = eqx.field(static=True, default="reverse")
+
+    def __check_init__(self):
+        check_autodiff(self.autodiff)
 
 
 class RigidModel(AbstractModel):
@@ -121,8 +127,11 @@ class RigidModel(AbstractModel):
         energy = 0.5 * omega**2 + p**2 * (jnp.cos(a - jnp.abs(theta)) - jnp.cos(a))
         energy = jnp.where(side * omega < 0, eta**2 * energy, energy)
         c = jnp.cos(a) + energy / p**2
-        peak = (a - jnp.arccos(jnp.clip(c, -1.0, 1.0))) / a
-        return jnp.where(c >= jnp.cos((1 - self.threshold) * a), self.threshold, peak)
+        over = c >= jnp.cos((1 - self.threshold) * a)
+        # double where: the masked branch must not see c ≥ 1, where arccos′ = −∞ and its zero
+        # cotangent would become 0·∞ = NaN under `grad`; cos α is a safe stand-in (peak 0)
+        peak = (a - jnp.arccos(jnp.where(over, jnp.cos(a), jnp.maximum(c, -1.0)))) / a
+        return jnp.where(over, self.threshold, peak)
 
     def run(self, excitation, integrator, save, t1):
         return _run(self, excitation, integrator, save, t1)
@@ -162,7 +171,8 @@ class _Machinery(eqx.Module):
 
 def _run(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, save: Save | None, t1) -> Solution:
     m = _machinery(model, exc, integ, save, t1)
-    c = eqxi.while_loop(m.active, m.body, m.c0, max_steps=integ.max_iterations, kind="checkpointed")
+    kind = "lax" if integ.autodiff == "forward" else "checkpointed"
+    c = eqxi.while_loop(m.active, m.body, m.c0, max_steps=integ.max_iterations, kind=kind)
     return m.finish(c)
 
 
@@ -282,6 +292,7 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
             stepsize_controller=controller,
             event=event,
             max_steps=integ.max_steps,
+            adjoint=diffrax_adjoint(integ.autodiff),
             throw=False,
         )
         tf = sol.ts[-1]

@@ -63,7 +63,7 @@ from ._peaks import hermite_peak as _hermite_peak
 from .excitation import AbstractExcitation
 from .generalized_alpha import GeneralizedAlpha
 from .geometry import G, Block
-from .model import AbstractIntegrator, AbstractModel
+from .model import AbstractIntegrator, AbstractModel, check_autodiff, diffrax_adjoint
 from .results import Solution, Status
 
 # θs/α′ default from the work–precision study (16 quasi-rigid pulse scenes, tanα = 0.2, error of
@@ -411,8 +411,10 @@ class SpringIntegrator(AbstractIntegrator):
     solver: str = eqx.field(static=True, default="kvaerno5")
     max_steps: int = eqx.field(static=True, default=20_000)
     root_finder: str = eqx.field(static=True, default="newton")
+    autodiff: str = eqx.field(static=True, default="reverse")  # or "forward": see model.diffrax_adjoint
 
     def __check_init__(self):
+        check_autodiff(self.autodiff)
         if self.solver not in _SOLVERS:
             raise JaxrockInputError(f"solver = {self.solver!r}; valid: {tuple(_SOLVERS)}")
         if not (0 < self.rtol < 1) or not (0 < self.atol < 1):
@@ -496,6 +498,7 @@ class SpringIntegrator(AbstractIntegrator):
             stepsize_controller=self.controller(mech, excitation, dtmax),
             event=event,
             max_steps=self.max_steps,
+            adjoint=diffrax_adjoint(self.autodiff),
             throw=throw,
         )
 
