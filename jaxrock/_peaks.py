@@ -41,14 +41,33 @@ def hermite_peak(ts, th, om):
     return jnp.max(jnp.where(valid, best, 0.0))
 
 
-def first_exceedance(ts, th, level):
-    """First time |θ| exceeds `level` (linear between recorded steps); +inf if never."""
+def hermite_crossing(t0, t1, th0, th1, om0, om1, level, newton: int = 4):
+    """Time in [t0, t1] at which |θ| reaches `level` on the step's cubic Hermite interpolant, for a
+    step that ends beyond it (|θ₁| ≥ level): the linear estimate refined by Newton on the cubic,
+    kept in [0, 1]. Accurate to the interpolant's O(dt⁴), so its derivative with respect to the
+    parameters is the crossing's (a linear estimate's derivative is off by O(dt²) and jumps with
+    the step sequence)."""
+    sgn = jnp.where(th1 >= 0, 1.0, -1.0)
+    dt = t1 - t0
+    a0, a1, w0, w1 = sgn * th0, sgn * th1, sgn * om0 * dt, sgn * om1 * dt
+    rise = jnp.where(a1 > a0, a1 - a0, 1.0)
+    s = jnp.clip((level - a0) / rise, 0.0, 1.0)
+    for _ in range(newton):
+        s2, s3 = s * s, s * s * s
+        f = (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * w0 + (-2 * s3 + 3 * s2) * a1 + (s3 - s2) * w1 - level
+        df = (6 * s2 - 6 * s) * a0 + (3 * s2 - 4 * s + 1) * w0 + (-6 * s2 + 6 * s) * a1 + (3 * s2 - 2 * s) * w1
+        s = jnp.clip(s - f / jnp.where(df > 0, df, 1.0) * (df > 0), 0.0, 1.0)
+    return t0 + s * dt
+
+
+def first_exceedance(ts, th, om, level):
+    """First time |θ| exceeds `level` (on the cubic Hermite interpolant of the recorded steps);
+    +inf if never."""
     x = jnp.abs(th) - level
     ok = jnp.isfinite(ts) & jnp.isfinite(x)
     x = jnp.where(ok, x, -1.0)
     above = x > 0
     k = jnp.argmax(above)
     km = jnp.maximum(k - 1, 0)
-    frac = jnp.clip(-x[km] / jnp.where(x[k] - x[km] > 0, x[k] - x[km], 1.0), 0.0, 1.0)
-    tk = jnp.where(k > 0, ts[km] + frac * (ts[k] - ts[km]), ts[k])
+    tk = jnp.where(k > 0, hermite_crossing(ts[km], ts[k], th[km], th[k], om[km], om[k], level), ts[k])
     return jnp.where(jnp.any(above), tk, jnp.inf)

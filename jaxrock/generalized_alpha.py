@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 
 from . import _linalg
-from ._peaks import hermite_peak
+from ._peaks import hermite_crossing, hermite_peak
 from ._validate import JaxrockInputError
 from .model import AbstractIntegrator
 from .results import Status
@@ -264,9 +264,8 @@ class GeneralizedAlpha(AbstractIntegrator):
             om0, om1 = c["v"][0], s["v1"][0]
             pk = hermite_peak(jnp.stack([t, t1]), jnp.stack([th0, th1]), jnp.stack([om0, om1]))
             peak = jnp.maximum(c["peak"], pk)
-            a0, a1 = jnp.abs(th0), jnp.abs(th1)
-            rise = jnp.where(a1 > a0, a1 - a0, 1.0)
-            crossing = lambda level: t + jnp.clip((level - a0) / rise, 0.0, 1.0) * (t1 - t)  # |θ| = level, linear
+            a1 = jnp.abs(th1)
+            crossing = lambda level: hermite_crossing(t, t1, th0, th1, om0, om1, level)  # |θ| = level
             over = pk >= thr
             t_over = crossing(thr)
             up_now = jnp.isinf(c["t_up"]) & (a1 > theta_up)

@@ -31,12 +31,12 @@ def check_autodiff(autodiff: str):
         raise JaxrockInputError(f"autodiff = {autodiff!r}; valid: {AUTODIFF_MODES}")
 
 
-def diffrax_adjoint(autodiff: str) -> diffrax.AbstractAdjoint:
+def diffrax_adjoint(autodiff: str, checkpoints: int | None = None) -> diffrax.AbstractAdjoint:
     """diffrax's adjoint for an integrator's `autodiff` mode: `"reverse"` (`jax.grad`, `jax.vjp`,
-    `jax.jacrev`; recursive checkpointing) or `"forward"` (`jax.jvp`, `jax.jacfwd`; plain loops, no
-    stored trajectory). JAX cannot run forward mode through a reverse-mode loop (a `custom_vjp`),
-    nor the reverse, so the mode is chosen with the integrator."""
-    return diffrax.ForwardMode() if autodiff == "forward" else diffrax.RecursiveCheckpointAdjoint()
+    `jax.jacrev`; recursive checkpointing, `checkpoints` as diffrax's) or `"forward"` (`jax.jvp`,
+    `jax.jacfwd`; plain loops, no stored trajectory). JAX cannot run forward mode through a
+    reverse-mode loop (a `custom_vjp`), nor the reverse, so the mode is chosen with the integrator."""
+    return diffrax.ForwardMode() if autodiff == "forward" else diffrax.RecursiveCheckpointAdjoint(checkpoints)
 
 
 class AbstractModel(eqx.Module):

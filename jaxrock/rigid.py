@@ -278,7 +278,10 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         dt0 = jnp.where(at_zero, jnp.clip(dt_flight, dt_min, h_nom), h_nom)
         dt0 = jnp.where(c.dt_next > 0, c.dt_next, dt0)
         t_win = jnp.minimum(t_seg, c.t + integ.chunk_steps * h_nom)
-        dt0 = jnp.minimum(dt0, jnp.maximum(t_win - c.t, tiny))
+        # A step size carries no derivative (as diffrax's own controller): the flight estimate's
+        # |θ̇|/|θ̈| has an infinite derivative where θ̈ underflows (an overturned lane after the
+        # pulse, still evaluated under vmap), and 0·∞ = NaN reached every lane's gradient.
+        dt0 = jax.lax.stop_gradient(jnp.minimum(dt0, jnp.maximum(t_win - c.t, tiny)))
         saveat = diffrax.SaveAt(t1=True, dense=not summary_only)
         sol = diffrax.diffeqsolve(
             term,
@@ -292,7 +295,13 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
             stepsize_controller=controller,
             event=event,
             max_steps=integ.max_steps,
-            adjoint=diffrax_adjoint(integ.autodiff),
+            # every step of a window checkpointed: a window's solve that recomputes steps inside
+            # the segment loop's own checkpointed backward pass returned wrong cotangents
+            # (d max_theta/d a_p 1e-4 off at rtol 1e-12, where a window takes > 90 steps, the
+            # default number of checkpoints for max_steps = 4096; forward mode, and either loop
+            # storing every step, agree with central differences to 1e-9). Costs memory in
+            # reverse mode only: max_steps states per window being differentiated.
+            adjoint=diffrax_adjoint(integ.autodiff, checkpoints=integ.max_steps),
             throw=False,
         )
         tf = sol.ts[-1]

@@ -739,7 +739,7 @@ class SpringModel(AbstractModel):
             peak = _hermite_peak(ts_steps, th, om)
             status = _status_of(sol.result)
             t_last = jnp.max(jnp.where(jnp.isfinite(ts_steps), ts_steps, -jnp.inf))
-            return self._summary(peak, t_last, sol.result, ts_steps, th, theta_up, status, thr, sol.ts[0], hist)
+            return self._summary(peak, t_last, sol.result, ts_steps, th, om, theta_up, status, thr, sol.ts[0], hist)
 
         # phase 1: the excitation window
         sub = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
@@ -786,9 +786,10 @@ class SpringModel(AbstractModel):
         over2 = (~done) & (sol2.result == diffrax.RESULTS.event_occurred) & sol2.event_mask[0]
         ts_all = jnp.concatenate([ts1, ts2])
         th_all = jnp.concatenate([th1, th2])
+        om_all = jnp.concatenate([om1, om2])
         t_last2 = jnp.max(jnp.where(jnp.isfinite(ts2), ts2, -jnp.inf))
         t_over = jnp.where(over1, t_start2, jnp.where(over2, t_last2, jnp.inf))
-        return self._finish(peak, over1 | over2, t_over, _first_exceedance(ts_all, th_all, theta_up), status, thr, None, None)
+        return self._finish(peak, over1 | over2, t_over, _first_exceedance(ts_all, th_all, om_all, theta_up), status, thr, None, None)
 
     def _summary_end(self, mech, excitation, t1):
         """Summary runs end at t1, or 20 rocking periods 2π/p′ after the excitation."""
@@ -822,10 +823,10 @@ class SpringModel(AbstractModel):
     def _alpha_solution(self, out, thr, ts_hist=None):
         return self._finish(out["peak"], out["overturned"], out["t_overturn"], out["t_up"], out["status"], thr, ts_hist, out["history"], out["steps"])
 
-    def _summary(self, peak, t_last, result, ts, th, theta_up, status, thr, ts_hist, hist):
+    def _summary(self, peak, t_last, result, ts, th, om, theta_up, status, thr, ts_hist, hist):
         over = (result == diffrax.RESULTS.event_occurred) & (peak >= thr * (1 - 1e-6))
         t_over = jnp.where(over, t_last, jnp.inf)
-        return self._finish(peak, over, t_over, _first_exceedance(ts, th, theta_up), status, thr, ts_hist, hist)
+        return self._finish(peak, over, t_over, _first_exceedance(ts, th, om, theta_up), status, thr, ts_hist, hist)
 
     def _finish(self, peak, over, t_over, t_up, status, thr, ts_hist, hist, n_iterations=0):
         alpha_r = self.block.alpha_r
