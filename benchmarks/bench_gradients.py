@@ -1,0 +1,96 @@
+"""Cost of a gradient relative to a forward (summary) run, per model and autodiff mode.
+
+    python benchmarks/bench_gradients.py [--n 64]
+
+Scenes: `--n` random cells of the (ω_p/p, a_p/(g tanα)) plane (1–15 × 0.5–10, symmetric pulse,
+seed 0) on the 2h = 10 m, tanα = 0.2 block, all vmapped in one call. Rows:
+
+- forward run: `jax.vmap(simulate)` (the summary, max_theta), at the model's default integrator;
+- reverse: `jax.vmap(jax.grad)` of max_theta with respect to (a_p, ω_p) (one backward pass);
+- forward mode: `jax.vmap(jax.jacfwd)` with respect to (a_p, ω_p) (two tangents), with
+  `autodiff="forward"` (RM, quasi-rigid SM) or the default generalized-α (flexible SM).
+
+Warm times (median of 3) per scene, the ratio to the forward run, and compile time apart (first
+call minus warm). Written to benchmarks/results/bench_gradients.txt.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import jaxrock as jr
+from jaxrock.spring import Column, SpringIntegrator, SpringModel
+
+HERE = Path(__file__).resolve().parent
+LINES: list[str] = []
+
+
+def out(line: str = "") -> None:
+    print(line, flush=True)
+    LINES.append(line)
+
+
+def timed(f, *args):
+    t0 = time.perf_counter()
+    jax.block_until_ready(f(*args))
+    first = time.perf_counter() - t0
+    warm = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        jax.block_until_ready(f(*args))
+        warm.append(time.perf_counter() - t0)
+    w = float(np.median(warm))
+    return w, first - w
+
+
+def cases():
+    blk = jr.Block.from_slenderness(10.0, 0.2)
+    yield "RM", jr.RigidModel(blk), {"reverse": jr.EventIntegrator(), "forward": jr.EventIntegrator(autodiff="forward")}
+    yield "quasi-rigid SM", SpringModel(blk), {
+        "reverse": SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5"),
+        "forward": SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", autodiff="forward"),
+    }
+    flex = SpringModel(jr.Block.from_slenderness(10.0, 0.2), Column.concrete(), n_elements=4)
+    yield "flexible SM (4 el.)", flex, {"forward": None}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=64, help="number of random scenes (vmapped)")
+    args = ap.parse_args()
+    rng = np.random.default_rng(0)
+    wr, ar = rng.uniform(1, 15, args.n), rng.uniform(0.5, 10, args.n)
+    out(f"# gradient cost vs forward run — {args.n} random pulse scenes vmapped, 2h = 10 m, tanα = 0.2")
+    out(f"# {platform.node()} · {platform.processor() or platform.machine()} · jax {jax.__version__} · {jax.devices()[0].platform}")
+    out(f"{'model':22s} {'run':34s} {'ms/scene':>9s} {'× forward':>9s} {'compile s':>9s}")
+    for name, model, integs in cases():
+        blk = model.block
+        a = jnp.asarray(ar * float(blk.uplift_acceleration))
+        w = jnp.asarray(wr * float(blk.p_r))
+
+        def peak(a_p, omega_p, integ):
+            return jr.simulate(model, jr.RickerPulse(a_p, omega_p), integrator=integ).max_theta
+
+        default = integs.get("reverse", integs.get("forward"))
+        t_fwd, c_fwd = timed(jax.jit(jax.vmap(lambda a_p, w_p: peak(a_p, w_p, default))), a, w)
+        out(f"{name:22s} {'forward run (summary)':34s} {1e3 * t_fwd / args.n:9.3f} {1.0:9.2f} {c_fwd:9.1f}")
+        if "reverse" in integs:
+            g = jax.jit(jax.vmap(jax.grad(lambda a_p, w_p: peak(a_p, w_p, integs["reverse"]), argnums=(0, 1))))
+            t, c = timed(g, a, w)
+            out(f"{name:22s} {'reverse: grad wrt (a_p, ω_p)':34s} {1e3 * t / args.n:9.3f} {t / t_fwd:9.2f} {c:9.1f}")
+        jf = jax.jit(jax.vmap(jax.jacfwd(lambda a_p, w_p: peak(a_p, w_p, integs["forward"]), argnums=(0, 1))))
+        t, c = timed(jf, a, w)
+        out(f"{name:22s} {'forward mode: jacfwd wrt (a_p, ω_p)':34s} {1e3 * t / args.n:9.3f} {t / t_fwd:9.2f} {c:9.1f}")
+    (HERE / "results").mkdir(exist_ok=True)
+    (HERE / "results" / "bench_gradients.txt").write_text("\n".join(LINES) + "\n")
+
+
+if __name__ == "__main__":
+    main()
