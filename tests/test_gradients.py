@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 import jaxrock as jr
-from jaxrock.spring import SpringModel, cbar_eq17
+from jaxrock.spring import Column, SpringModel, cbar_eq17
 
 PULSES = {"symmetric": jr.RickerPulse, "antisymmetric": jr.AntisymmetricRickerPulse}
 INTEGRATORS = {"reverse": jr.EventIntegrator(), "forward": jr.EventIntegrator(autodiff="forward")}
@@ -311,3 +311,33 @@ def test_spring_gradients_match_central_differences():
     err = np.abs(jac - fd) / np.where(scale > 0, scale, 1.0)
     assert err.max() < 1e-4, np.array2string(err.max(axis=2), precision=1)
     assert np.all(jac[3, MAX_THETA] == 0) and np.all(jac[:3, T_OVERTURN] == 0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["quasi-rigid", "flexible"])
+def test_spring_gradients_are_finite_on_random_scenes(kind):
+    """The SM on random scenes (both sides of the boundary, plain and extended bases, c̄ of
+    eq. 17): the quasi-rigid SM in reverse mode (its default Tsit5), the flexible column (4
+    elements, concrete) in forward mode (its default generalized-α). Finite, and zero where
+    pinned."""
+    rng = np.random.default_rng(3)
+    n = 32 if kind == "quasi-rigid" else 8
+    x = random_scenes(n, seed=3)
+    x[:, 5] = np.asarray(cbar_eq17(jr.Block.from_slenderness(x[:, 2], x[:, 3], x[:, 3] * x[:, 4]).alpha_r))
+    x[:, 2] = np.where(kind == "flexible", rng.uniform(5.0, 30.0, n), x[:, 2])
+    column = None if kind == "quasi-rigid" else Column.concrete()
+    jacobian_of = jax.jacrev if kind == "quasi-rigid" else jax.jacfwd
+
+    def f(x):
+        a_p, omega_p, height, tan_a, base, cbar = x
+        block = jr.Block.from_slenderness(height, tan_a, tan_a * base)
+        model = SpringModel(block, column, cbar=cbar, n_elements=4)
+        s = jr.simulate(model, jr.RickerPulse(a_p, omega_p))
+        return jnp.stack([s.max_theta, _finite(s.t_overturn), _finite(s.t_uplift)]), s
+
+    jac, s = jax.jit(jax.vmap(jacobian_of(f, has_aux=True)))(jnp.asarray(x))
+    jac, over = np.asarray(jac), np.asarray(s.overturned)
+    assert np.all(np.asarray(s.status == jr.Status.ok))
+    assert np.all(np.isfinite(jac))
+    assert over.any() and (~over).any()
+    assert np.all(jac[over, MAX_THETA] == 0) and np.all(jac[~over, T_OVERTURN] == 0)
