@@ -6,6 +6,18 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 
+def _hermite(s, a0, a1, w0, w1):
+    """The cubic Hermite interpolant at s ∈ [0, 1] of a step from (a0, w0) to (a1, w1), with the
+    slopes w already multiplied by the step length."""
+    s2, s3 = s * s, s * s * s
+    return (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * w0 + (-2 * s3 + 3 * s2) * a1 + (s3 - s2) * w1
+
+
+def _hermite_slope(a0, a1, w0, w1):
+    """(A, B, C) of the interpolant's derivative d/ds = A s² + B s + C."""
+    return 6 * a0 + 3 * w0 - 6 * a1 + 3 * w1, -6 * a0 - 4 * w0 + 6 * a1 - 2 * w1, w0
+
+
 def hermite_peak(ts, th, om):
     """max |θ| over all steps from (t, θ, θ̇) at the step ends, maximising the cubic Hermite
     interpolant of each step in closed form. Unused (non-finite) entries are ignored."""
@@ -16,10 +28,7 @@ def hermite_peak(ts, th, om):
     a0, a1 = safe(th[:-1], 0.0), safe(th[1:], 0.0)
     w0, w1 = safe(om[:-1], 0.0), safe(om[1:], 0.0)
     dt = t1s - t0s
-    # dθ/ds = A s² + B s + C, s ∈ [0, 1]
-    A = 6 * a0 + 3 * dt * w0 - 6 * a1 + 3 * dt * w1
-    B = -6 * a0 - 4 * dt * w0 + 6 * a1 - 2 * dt * w1
-    C = dt * w0
+    A, B, C = _hermite_slope(a0, a1, dt * w0, dt * w1)
     disc = B**2 - 4 * A * C
     sq = jnp.sqrt(jnp.where(disc > 0, disc, 1.0))
     qq = -0.5 * (B + jnp.where(B >= 0, 1.0, -1.0) * sq)
@@ -30,14 +39,10 @@ def hermite_peak(ts, th, om):
     # degenerate quadratic (A = 0): single root −C/B
     r3 = jnp.where((jnp.abs(A) == 0) & (jnp.abs(B) > 0), -C / jnp.where(jnp.abs(B) > 0, B, 1.0), -1.0)
 
-    def herm(s):
-        s2, s3 = s * s, s * s * s
-        return (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * dt * w0 + (-2 * s3 + 3 * s2) * a1 + (s3 - s2) * dt * w1
-
     best = jnp.maximum(jnp.abs(a0), jnp.abs(a1))
     for r in (r1, r2, r3):
         inside = (r > 0) & (r < 1)
-        best = jnp.maximum(best, jnp.where(inside, jnp.abs(herm(jnp.where(inside, r, 0.5))), 0.0))
+        best = jnp.maximum(best, jnp.where(inside, jnp.abs(_hermite(jnp.where(inside, r, 0.5), a0, a1, dt * w0, dt * w1)), 0.0))
     return jnp.max(jnp.where(valid, best, 0.0))
 
 
@@ -52,10 +57,10 @@ def hermite_crossing(t0, t1, th0, th1, om0, om1, level, newton: int = 4):
     a0, a1, w0, w1 = sgn * th0, sgn * th1, sgn * om0 * dt, sgn * om1 * dt
     rise = jnp.where(a1 > a0, a1 - a0, 1.0)
     s = jnp.clip((level - a0) / rise, 0.0, 1.0)
+    A, B, C = _hermite_slope(a0, a1, w0, w1)
     for _ in range(newton):
-        s2, s3 = s * s, s * s * s
-        f = (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * w0 + (-2 * s3 + 3 * s2) * a1 + (s3 - s2) * w1 - level
-        df = (6 * s2 - 6 * s) * a0 + (3 * s2 - 4 * s + 1) * w0 + (-6 * s2 + 6 * s) * a1 + (3 * s2 - 2 * s) * w1
+        f = _hermite(s, a0, a1, w0, w1) - level
+        df = (A * s + B) * s + C
         s = jnp.clip(s - f / jnp.where(df > 0, df, 1.0) * (df > 0), 0.0, 1.0)
     return t0 + s * dt
 

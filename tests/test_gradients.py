@@ -164,23 +164,34 @@ def jacobian(x: np.ndarray, pulse: str = "symmetric") -> np.ndarray:
     return np.asarray(jac)[: len(x)]
 
 
-def central_differences(x: np.ndarray, rel: float) -> np.ndarray:
-    """Central differences with a step `rel` × the parameter; at η = 1 (the top of its range) a
-    one-sided second-order difference."""
+def central_differences(x: np.ndarray, rel: float, values_of=None, top: int | None = None) -> np.ndarray:
+    """Central differences of `values_of` (rows of parameters → rows of outputs; default the RM's
+    `values`) with a step `rel` × the parameter; in column `top`, where the parameter is at the top
+    of its range (1: η), a one-sided second-order difference."""
+    values_of = values if values_of is None else values_of
     n, m = x.shape
     steps = rel * np.abs(x)
+    shifts = (+1, -1) if top is None else (+1, -1, -2)
     shifted = []
     for k in range(m):
-        for sgn in (+1, -1, -2):
+        for sgn in shifts:
             y = x.copy()
             y[:, k] += sgn * steps[:, k]
             shifted.append(y)
-    v = values(np.concatenate(shifted)).reshape(m, 3, n, 3)  # param, shift, scene, output
-    central = (v[:, 0] - v[:, 1]) / (2 * steps.T[:, :, None])
-    one_sided = (3 * values(x)[None] - 4 * v[:, 1] + v[:, 2]) / (2 * steps.T[:, :, None])
-    at_top = np.zeros((m, n), bool)
-    at_top[PARAMS.index("eta")] = x[:, PARAMS.index("eta")] >= 1.0
-    return np.where(at_top[:, :, None], one_sided, central).transpose(1, 2, 0)  # scene, output, param
+    v = values_of(np.concatenate(shifted)).reshape(m, len(shifts), n, 3)  # param, shift, scene, output
+    fd = (v[:, 0] - v[:, 1]) / (2 * steps.T[:, :, None])
+    if top is not None:
+        one_sided = (3 * values_of(x)[None] - 4 * v[:, 1] + v[:, 2]) / (2 * steps.T[:, :, None])
+        at_top = np.zeros((m, n), bool)
+        at_top[top] = x[:, top] >= 1.0
+        fd = np.where(at_top[:, :, None], one_sided, fd)
+    return fd.transpose(1, 2, 0)  # scene, output, param
+
+
+def relative_error(jac: np.ndarray, fd: np.ndarray) -> np.ndarray:
+    """|jac − fd| relative to the largest derivative of each scene's output."""
+    scale = np.abs(fd).max(axis=2, keepdims=True)
+    return np.abs(jac - fd) / np.where(scale > 0, scale, 1.0)
 
 
 G_TAN = 9.81 * 0.2  # g tanα of the 10 m, tanα = 0.2 block
@@ -208,9 +219,7 @@ def test_rigid_gradients_match_central_differences_at_the_default_integrator():
         ]
     )
     jac = jacobian(x)
-    fd = central_differences(x, 1e-5)
-    scale = np.abs(fd).max(axis=2, keepdims=True)  # per scene and output
-    err = np.abs(jac - fd) / np.where(scale > 0, scale, 1.0)
+    err = relative_error(jac, central_differences(x, 1e-5, top=PARAMS.index("eta")))
     assert err.max() < 1e-5, np.array2string(err.max(axis=2), precision=1)
     assert np.all(jac[:4, T_OVERTURN] == 0) and np.all(jac[4:, MAX_THETA] == 0)
     assert np.all(np.abs(jac[:4, MAX_THETA]).max(axis=1) > 1e-2) and np.all(np.abs(jac[4:, T_OVERTURN]).max(axis=1) > 1e-2)
@@ -256,7 +265,7 @@ def test_gradients_follow_the_laws_next_to_the_boundary():
         assert changes[-1] < changes[0], law
     p = float(jr.Block.from_slenderness(10.0, 0.2).p_r)
     assert above[-1] == pytest.approx(-0.5 / p, rel=1e-3)
-    fd = central_differences(x[[1, 5]], 1e-7)[:, :, 0]  # step 1e-7 a*: a tenth of the distance
+    fd = central_differences(x[[1, 5]], 1e-7, top=PARAMS.index("eta"))[:, :, 0]  # step 1e-7 a*: a tenth of the distance
     np.testing.assert_allclose(jac[[1, 5], [MAX_THETA, T_OVERTURN]], fd[[0, 1], [MAX_THETA, T_OVERTURN]], rtol=1e-3)
 
 
@@ -265,10 +274,12 @@ def test_gradients_follow_the_laws_next_to_the_boundary():
 SM_PARAMS = ("a_p", "omega_p", "height", "tan_alpha", "base", "cbar")
 
 
-def spring_summary(x, pulse: str = "symmetric"):
+def spring_summary(x, column: Column | None = None):
+    """(max_theta, t_overturn or 0, t_uplift or 0) and the Solution of x = SM_PARAMS: the
+    quasi-rigid SM, or a 4-element flexible `column`, at its default integrator (symmetric pulse)."""
     a_p, omega_p, height, tan_a, base, cbar = x
     block = jr.Block.from_slenderness(height, tan_a, tan_a * base)
-    s = jr.simulate(SpringModel(block, cbar=cbar), PULSES[pulse](a_p, omega_p))
+    s = jr.simulate(SpringModel(block, column, cbar=cbar, n_elements=4), jr.RickerPulse(a_p, omega_p))
     return jnp.stack([s.max_theta, _finite(s.t_overturn), _finite(s.t_uplift)]), s
 
 
@@ -301,14 +312,7 @@ def test_spring_gradients_match_central_differences():
     jac = np.asarray(jac)
     assert np.all(np.asarray(s.status == jr.Status.ok)) and np.all(np.isfinite(jac))
     assert list(np.asarray(s.overturned)) == [False, False, False, True]
-    n, m = x.shape
-    steps = 1e-4 * np.abs(x)
-    plus = np.stack([x + np.eye(m)[k] * steps[:, k : k + 1] for k in range(m)])  # param, scene, param
-    minus = np.stack([x - np.eye(m)[k] * steps[:, k : k + 1] for k in range(m)])
-    v = np.asarray(val_p(jnp.asarray(np.concatenate([plus, minus]).reshape(-1, m)))).reshape(2, m, n, 3)
-    fd = ((v[0] - v[1]) / (2 * steps.T[:, :, None])).transpose(1, 2, 0)  # scene, output, param
-    scale = np.abs(fd).max(axis=2, keepdims=True)
-    err = np.abs(jac - fd) / np.where(scale > 0, scale, 1.0)
+    err = relative_error(jac, central_differences(x, 1e-4, lambda y: np.asarray(val_p(jnp.asarray(y)))))
     assert err.max() < 1e-4, np.array2string(err.max(axis=2), precision=1)
     assert np.all(jac[3, MAX_THETA] == 0) and np.all(jac[:3, T_OVERTURN] == 0)
 
@@ -328,14 +332,7 @@ def test_spring_gradients_are_finite_on_random_scenes(kind):
     column = None if kind == "quasi-rigid" else Column.concrete()
     jacobian_of = jax.jacrev if kind == "quasi-rigid" else jax.jacfwd
 
-    def f(x):
-        a_p, omega_p, height, tan_a, base, cbar = x
-        block = jr.Block.from_slenderness(height, tan_a, tan_a * base)
-        model = SpringModel(block, column, cbar=cbar, n_elements=4)
-        s = jr.simulate(model, jr.RickerPulse(a_p, omega_p))
-        return jnp.stack([s.max_theta, _finite(s.t_overturn), _finite(s.t_uplift)]), s
-
-    jac, s = jax.jit(jax.vmap(jacobian_of(f, has_aux=True)))(jnp.asarray(x))
+    jac, s = jax.jit(jax.vmap(jacobian_of(lambda y: spring_summary(y, column), has_aux=True)))(jnp.asarray(x))
     jac, over = np.asarray(jac), np.asarray(s.overturned)
     assert np.all(np.asarray(s.status == jr.Status.ok))
     assert np.all(np.isfinite(jac))
