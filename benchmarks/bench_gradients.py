@@ -22,7 +22,9 @@ Bias of generalized-α's forward-mode derivative (`--part bias`): on 8 random fl
 (4-element concrete columns, 2h 5–30 m, tanα 0.12–0.3, a_p 1.2–3 g tanα, ω_p 2–8 p, seed 5) and
 the same scenes' one-DOF quasi-rigid SM, `jacfwd` of max_theta in a_p against the slope of the
 values themselves (a quadratic fitted to 41 runs over a_p ± 0.1 %, which averages the step
-ladder's jumps out), at tolerances 1e-5 … 1e-9.
+ladder's jumps out), at tolerances 1e-5 … 1e-9; and diffrax's Kvaerno5 at 1e-6 in reverse mode
+(`jax.grad`; for the one-DOF SM its default Tsit5 1e-10) against the slope of generalized-α at
+1e-9; per-scene values at the end.
 
 Written to benchmarks/results/bench_gradients.txt (`--part bias`: bench_gradients_bias.txt).
 """
@@ -140,28 +142,46 @@ def bias(n: int = 8, points: int = 41, span: float = 1e-3):
     rng = np.random.default_rng(5)
     H, TA, AR, WR = rng.uniform(5, 30, n), rng.uniform(0.12, 0.3, n), rng.uniform(1.2, 3.0, n), rng.uniform(2, 8, n)
     r = np.linspace(-span, span, points)
+    rep = lambda x: jnp.asarray(np.repeat(x, points))
+    grid = (jnp.asarray((AR[:, None] * (1 + r)[None]).ravel()), rep(H), rep(TA), rep(WR))
+    centre = tuple(jnp.asarray(x) for x in (AR, H, TA, WR))
+
+    def peak_of(column, integ):
+        def peak(a_r, h, ta, wr):
+            blk = jr.Block.from_slenderness(h, ta)
+            model = SpringModel(blk, column, n_elements=4)
+            return jr.simulate(model, jr.RickerPulse(a_r * blk.uplift_acceleration, wr * blk.p_r), integrator=integ).max_theta
+
+        return peak
+
     out(f"# generalized-α: jacfwd of max_theta in a_p vs the slope of the values (quadratic fit over a_p ± {span:g}), {n} scenes")
-    out(f"{'column':10s} {'tol':>6s} {'ms/scene':>9s} {'median |jacfwd/slope − 1|':>26s} {'max':>8s}")
+    out(f"{'column':10s} {'integrator':22s} {'ms/scene':>9s} {'median |d/slope − 1|':>21s} {'max':>8s}")
+    per_scene = []
     for name, column in (("flexible", Column.concrete()), ("one-DOF", None)):
         for tol in ((1e-5, 1e-7, 1e-9) if column is not None else (1e-7, 1e-9)):
-            integ = GeneralizedAlpha(tol, tol)
-
-            def peak(a_r, h, ta, wr):
-                blk = jr.Block.from_slenderness(h, ta)
-                model = SpringModel(blk, column, n_elements=4)
-                return jr.simulate(model, jr.RickerPulse(a_r * blk.uplift_acceleration, wr * blk.p_r), integrator=integ).max_theta
-
-            rep = lambda x: jnp.asarray(np.repeat(x, points))
+            peak = peak_of(column, GeneralizedAlpha(tol, tol))
             f = jax.jit(jax.vmap(peak))
-            args = (jnp.asarray((AR[:, None] * (1 + r)[None]).ravel()), rep(H), rep(TA), rep(WR))
-            jax.block_until_ready(f(*args))
+            jax.block_until_ready(f(*grid))
             t0 = time.perf_counter()
-            v = np.asarray(f(*args)).reshape(n, points)
+            v = np.asarray(f(*grid)).reshape(n, points)
             ms = 1e3 * (time.perf_counter() - t0) / (n * points)
             slope = np.array([np.polyfit(r, v[i], 2)[1] for i in range(n)])  # d/d(relative a_p) at the centre
-            jac = np.asarray(jax.jit(jax.vmap(jax.jacfwd(peak)))(*(jnp.asarray(x) for x in (AR, H, TA, WR)))) * AR
+            jac = np.asarray(jax.jit(jax.vmap(jax.jacfwd(peak)))(*centre)) * AR
             dev = np.abs(jac / slope - 1)
-            out(f"{name:10s} {tol:6.0e} {ms:9.1f} {np.median(dev):26.1e} {dev.max():8.1e}")
+            out(f"{name:10s} {f'generalized-α {tol:.0e}':22s} {ms:9.1f} {np.median(dev):21.1e} {dev.max():8.1e}")
+            if tol == 1e-9:
+                per_scene.append((name, jac, slope))
+        # the reverse-mode diffrax choice of each model, against the slope of generalized-α at 1e-9
+        label, integ = ("Kvaerno5 1e-6", SpringIntegrator(rtol=1e-6, atol=1e-6)) if column is not None else ("Tsit5 1e-10", SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5"))
+        g = np.asarray(jax.jit(jax.vmap(jax.grad(peak_of(column, integ))))(*centre)) * AR
+        slope = per_scene[-1][2]
+        dev = np.abs(g / slope - 1)
+        out(f"{name:10s} {label + ', grad':22s} {'':>9s} {np.median(dev):21.1e} {dev.max():8.1e}")
+        per_scene.append((f"{name}, {label} grad", g, slope))
+    out("# per scene (d max_theta / d relative a_p), generalized-α 1e-9 unless named")
+    for name, jac, slope in per_scene:
+        out(f"{name:24s} derivative " + " ".join(f"{x:8.4f}" for x in jac))
+        out(f"{'':24s} slope      " + " ".join(f"{x:8.4f}" for x in slope))
 
 
 if __name__ == "__main__":
