@@ -22,6 +22,7 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # help texts are shown as written: units "[m]" and ranges "a:b:n" are not markup
     help="Rocking bodies under earthquakes (Vassiliou, Mackie & Stojadinovic 2014), in JAX (float64).",
 )
 

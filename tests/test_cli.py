@@ -98,6 +98,25 @@ def test_every_command_has_help():
         assert "Usage" in r.output
 
 
+@pytest.mark.parametrize(
+    "cmd, text",
+    [
+        ("spectrum", "full height 2h [m]"),
+        ("simulate", "pulse amplitude [m/s²]"),
+        ("simulate", "pulse frequency [rad/s]"),
+        ("batch", "[pulse: symmetric | antisymmetric | elcentro | FILE]"),
+        ("record-spectrum", "body heights 2h [m]: '1,2,5' or 'a:b:n'"),
+        ("calibrate", "('0.1,0.2,0.3' or 'a:b:n'"),
+    ],
+)
+def test_help_shows_units_and_ranges_as_written(cmd, text):
+    """Help texts are not rich markup: '[m]' and the optional batch columns survive, and 'a:b:n'
+    is not turned into an emoji (it was, with typer's default rich_markup_mode)."""
+    r = invoke(cmd, "--help")
+    assert r.exit_code == 0, r.output
+    assert text in " ".join(r.output.split()), r.output
+
+
 def test_helpers():
     assert even_batch(2304, 4096) == 576
     assert 2304 % even_batch(2304, 500) == 0 and even_batch(2304, 500) <= 500
