@@ -1,13 +1,16 @@
-"""Figure 7 and the c̄ calibration (issue 4): `python experiments/fig07_energy_ratio.py [out_dir]`.
+"""Figure 7 and the c̄ calibration (issue 4): `python experiments/fig07_energy_ratio.py [--out out]`.
 
-Writes out_dir/fig07_energy_ratio.png, out_dir/calibration_cbar.png and out_dir/calibration.csv
-(default out_dir: out/) and prints the calibration table; see `jaxrock.calibration`.
+Writes <out>/fig07_energy_ratio.png, <out>/calibration_cbar.png and <out>/calibration.csv and
+prints the calibration table; see `jaxrock.calibration`.
 """
 
-import sys
+import argparse
 import time
 
 from jaxrock.calibration import calibration_report
+
+ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+ap.add_argument("--out", default="out", help="output folder (default: out)")
 
 
 def main(out_dir: str = "out") -> None:
@@ -20,4 +23,4 @@ def main(out_dir: str = "out") -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "out")
+    main(ap.parse_args().out)
