@@ -27,6 +27,16 @@ app = typer.Typer(
 )
 
 EXIT_INPUT = 2
+EXIT_UNTRUSTED = 1  # the work ran, but some run ended with a status other than ok
+
+# what to change, per failed status (the line printed beside a non-zero exit)
+STATUS_ADVICE = {
+    "max_iterations": "the loop bound was hit before the answer was fixed: shorten the free-rocking time or report the scene",
+    "max_steps": "the step bound was hit: the scene is stiff (tiny tanα or smoothing) or the tolerance too tight "
+    "(loosen --tol, or raise max_steps of the integrator in Python)",
+    "solver_failed": "the integrator failed (step underflow, divergence or NaN): loosen --tol or report the scene",
+    "missed_impact": "an impact was crossed without its event: report the command line as a bug",
+}
 
 
 class ModelKind(str, Enum):
@@ -43,6 +53,20 @@ class PulseKind(str, Enum):
 def _fail(msg: str):
     typer.echo(f"Error: {msg}", err=True)
     raise typer.Exit(EXIT_INPUT)
+
+
+def _exit_if_untrusted(status, what: str):
+    """One line per failed status kind on stderr and exit code 1, when any run is not ok (the
+    files were written; their status column says which)."""
+    from .results import STATUS_NAMES
+
+    counts = np.bincount(np.ravel(np.asarray(status)), minlength=len(STATUS_NAMES))
+    bad = [(STATUS_NAMES[k], int(c)) for k, c in enumerate(counts) if c and STATUS_NAMES[k] != "ok"]
+    if not bad:
+        return
+    for name, c in bad:
+        typer.echo(f"Warning: {c} {what} ended with status {name}: {STATUS_ADVICE[name]}", err=True)
+    raise typer.Exit(EXIT_UNTRUSTED)
 
 
 def _handles_input_errors(fn):
@@ -124,6 +148,18 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
     return scene_model(kind.value, block, cbar=0.0 if undamped else cbar, E=E, rho=rho, zeta=zeta)
 
 
+def _integrator(model: ModelKind, tol: Optional[float]):
+    """`--tol`: generalized-α at that local tolerance for the spring models; None: the default."""
+    if tol is None:
+        return None
+    from ._validate import JaxrockInputError
+    from .generalized_alpha import GeneralizedAlpha
+
+    if model == ModelKind.rigid:
+        raise JaxrockInputError("--tol selects the spring model's generalized-α integrator; the rigid model takes none")
+    return GeneralizedAlpha(rtol=tol, atol=tol)
+
+
 def even_batch(n: int, limit: int) -> int:
     """A batch size that splits n cells into equal batches of at most `limit`, about four or more
     of them (a progress bar that moves), so that no smaller last batch needs its own compilation.
@@ -199,14 +235,7 @@ def spectrum(
     ar = _axis("accel", accel_min, accel_max, n_accel)
     _check_count("--batch-size", batch_size)
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped)
-    integ = None
-    if tol is not None:
-        from ._validate import JaxrockInputError
-        from .generalized_alpha import GeneralizedAlpha
-
-        if model == ModelKind.rigid:
-            raise JaxrockInputError("--tol selects the spring model's generalized-α integrator; the rigid model takes none")
-        integ = GeneralizedAlpha(rtol=tol, atol=tol)
+    integ = _integrator(model, tol)
     ck = Path(f"{out}.checkpoint.npz") if checkpoint else None
     t0 = time.perf_counter()
     bs = even_batch(wr.size * ar.size, batch_size)
@@ -223,6 +252,7 @@ def spectrum(
     plt.close(fig)
     typer.echo(spectrum_summary(spec, seconds))
     typer.echo(f"wrote {nc} and {out}.png")
+    _exit_if_untrusted(spec.status, "cell(s)")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -277,9 +307,9 @@ def _jitted_simulate():
     return eqx.filter_jit(_simulate)
 
 
-def _simulate(model, excitation, save=None):
+def _simulate(model, excitation, save=None, integrator=None):
     """`jaxrock.simulate`, jitted (one compilation per model/excitation structure per process)."""
-    return _jitted_simulate()(model, excitation, save=save)
+    return _jitted_simulate()(model, excitation, save=save, integrator=integrator)
 
 
 def solution_summary(sol, model) -> str:
@@ -319,6 +349,7 @@ def simulate(
     E: Optional[float] = typer.Option(None, "--E", help="spring-flexible: Young's modulus [Pa] (default 30e9)"),
     rho: Optional[float] = typer.Option(None, help="spring-flexible: density [kg/m³] (default 2500)"),
     zeta: Optional[float] = typer.Option(None, help="spring-flexible: column damping ratio (default 0.01)"),
+    tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
     plot: Optional[Path] = typer.Option(None, help="write a time-history plot (PNG) here"),
     t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
     n_points: int = typer.Option(1500, help="plot: number of saved time points"),
@@ -329,8 +360,9 @@ def simulate(
 
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta)
     exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio)
+    integ = _integrator(model, tol)
     t0 = time.perf_counter()
-    sol = _simulate(m, exc)
+    sol = _simulate(m, exc, integrator=integ)
     seconds = time.perf_counter() - t0
     typer.echo(f"{model.value} model, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}")
     typer.echo(solution_summary(sol, m))
@@ -348,12 +380,13 @@ def simulate(
             w = float(exc.omega_p)
             t_start, t_end = max(t_start, -8.0 / w), min(t_end, 8.0 / w)
         ts = np.linspace(t_start, t_end + tf, n_points)
-        hist = _simulate(m, exc, save=Save(ts, ("theta",)))
+        hist = _simulate(m, exc, save=Save(ts, ("theta",)), integrator=integ)
         import matplotlib.pyplot as plt
 
         fig = plot_history(hist, exc, model=m, path=plot, title=f"{model.value}, 2h = {height:g} m, tanα = {tan_alpha:g}\n{desc}")
         plt.close(fig)
         typer.echo(f"wrote {plot}")
+    _exit_if_untrusted(sol.status._value, "run")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -384,6 +417,11 @@ def batch(
     )
     typer.echo(f"overturned: {rep.n_overturned}; status: " + ", ".join(f"{k} {v}" for k, v in rep.status_counts.items()))
     typer.echo(f"wrote {rep.path}")
+    bad = {k: v for k, v in rep.status_counts.items() if k != "ok"}
+    for name, c in bad.items():
+        typer.echo(f"Warning: {c} row(s) ended with status {name}: {STATUS_ADVICE[name]}", err=True)
+    if bad:
+        raise typer.Exit(EXIT_UNTRUSTED)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -466,6 +504,11 @@ def calibrate(
     rep = calibration_report(out, tan_alphas=ta, progress=not quiet, max_iter=max_iter)
     typer.echo(rep.format_table())
     typer.echo(f"{time.perf_counter() - t0:.1f} s; wrote " + ", ".join(str(p) for p in rep.files.values()))
+    stuck = [f"{r['tan_alpha']:g}" for r in rep.table if not r["converged"]]
+    if stuck:
+        typer.echo(f"Warning: c̄ did not converge in --max-iter {max_iter} iterations at tanα = {', '.join(stuck)} "
+                   f"({len(stuck)} of {len(rep.table)}): raise --max-iter", err=True)
+        raise typer.Exit(EXIT_UNTRUSTED)
 
 
 def main():  # pragma: no cover

@@ -291,3 +291,34 @@ def test_calibrate_bad_input_exits_2(tmp_path):
     assert r.exit_code == 2 and "--tan-alphas" in r.output
     r = invoke("record-spectrum", "--heights", "5,2", "--out", tmp_path / "x")
     assert r.exit_code == 2 and "heights" in r.output
+
+
+# -- honest exits: a run that is not ok exits 1 with a line saying what to change -----------------
+def test_simulate_failed_status_exits_1_with_advice():
+    """Generalized-α at 1e-14 cannot meet its tolerance on the step ladder: status solver_failed
+    (as in test_generalized_alpha's unreachable-tolerance test). The summary is printed, then one
+    line on what to change, and the exit code is 1 (was 0)."""
+    r = invoke("simulate", "--model", "spring", "--tol", 1e-14, "--accel-ratio", 3)
+    assert r.exit_code == 1, r.output
+    assert "status: solver_failed" in r.output
+    assert "1 run ended with status solver_failed" in r.output and "loosen --tol" in r.output
+    r = invoke("simulate", "--model", "spring", "--tol", 1e-6, "--accel-ratio", 3)
+    assert r.exit_code == 0, r.output
+    assert "Warning" not in r.output
+
+
+def test_spectrum_failed_cells_exit_1_after_writing(tmp_path):
+    out = tmp_path / "spec"
+    r = invoke("spectrum", "--model", "spring", "--tol", 1e-14, "--n-omega", 1, "--n-accel", 1, "--accel-min", 3,
+               "--omega-min", 2, "--refine", 0, "--out", out, "--quiet")
+    assert r.exit_code == 1, r.output
+    assert "1 cell(s) ended with status solver_failed" in r.output
+    assert Spectrum.load(tmp_path / "spec.nc").status.ravel().tolist() == [jr.Status.solver_failed._value.item()]
+
+
+def test_calibrate_not_converged_exits_1(tmp_path):
+    """Two optimiser iterations cannot meet the calibration's stopping test: every slenderness is
+    named on one line and the exit code is 1 (was 0, with converged=False only in the CSV)."""
+    r = invoke("calibrate", "--tan-alphas", "0.1,0.2,0.3", "--max-iter", 2, "--out", tmp_path, "--quiet")
+    assert r.exit_code == 1, r.output
+    assert "did not converge in --max-iter 2 iterations at tanα = 0.1, 0.2, 0.3 (3 of 3)" in r.output
