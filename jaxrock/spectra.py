@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import beam, rigid, spring
+from . import beam, provenance, rigid, spring
 from .generalized_alpha import GeneralizedAlpha
 from ._validate import JaxrockInputError, check_grid
 from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
@@ -261,7 +261,9 @@ def overturning_spectrum(
     - `pulse`: "symmetric" (Ricker) or "antisymmetric" (eq. 29).
     - `batch_size`: cells run together in one vmapped batch (memory bound).
     - `checkpoint`: a file (.npz) where finished batches are kept; rerunning the same call after an
-      interruption resumes from it, and it is removed when the spectrum is complete.
+      interruption resumes from it, and it is removed when the spectrum is complete. It records
+      what made it (`jaxrock.provenance`): one of another run (model, parameters, pulse, grid,
+      integrator, version) or an unreadable one is refused with a `JaxrockInputError`.
     - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
     """
     wr = check_grid("omega_ratio (omega_p/p)", omega_ratio)
@@ -279,13 +281,13 @@ def overturning_spectrum(
     out = {k: np.zeros(n, dtype=float if k == "max_theta" else (np.int32 if k == "status" else bool)) for k in fields}
     done = np.zeros(n, dtype=bool)
     ck = Path(checkpoint) if checkpoint is not None else None
-    key = np.concatenate([a_p, w_p])
+    made_by = provenance.describe(model=model, excitation=cls.__name__, integrator=integrator,
+                                  grid={"omega_ratio": wr, "accel_ratio": ar})
     if ck is not None and ck.exists():
-        saved = np.load(ck)
-        if saved["key"].shape == key.shape and np.array_equal(saved["key"], key):
-            done = saved["done"]
-            for k in fields:
-                out[k] = saved[k]
+        saved = provenance.load_checkpoint(ck, made_by, fields)
+        done = saved["done"]
+        for k in fields:
+            out[k] = saved[k]
     batch_size = min(int(batch_size), _memory_batch(model, integrator))
     starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
     bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
@@ -301,7 +303,7 @@ def overturning_spectrum(
         if ck is not None:
             ck.parent.mkdir(parents=True, exist_ok=True)
             tmp = ck.with_suffix(".tmp.npz")
-            np.savez(tmp, key=key, done=done, **out)
+            np.savez(tmp, made_by=provenance.to_json(made_by), done=done, **out)
             os.replace(tmp, ck)
         bar.update(sl.stop - sl.start)
     bar.close()

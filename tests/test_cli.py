@@ -322,3 +322,28 @@ def test_calibrate_not_converged_exits_1(tmp_path):
     r = invoke("calibrate", "--tan-alphas", "0.1,0.2,0.3", "--max-iter", 2, "--out", tmp_path, "--quiet")
     assert r.exit_code == 1, r.output
     assert "did not converge in --max-iter 2 iterations at tanα = 0.1, 0.2, 0.3 (3 of 3)" in r.output
+
+
+def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
+    """The checkpoint of an interrupted symmetric run, rerun as antisymmetric with the same --out:
+    exit 2 and one line naming the difference, before any cell runs (it resumed the symmetric
+    cells and labelled them antisymmetric)."""
+    from jaxrock import provenance
+    from jaxrock.cli import build_model
+
+    out = tmp_path / "spec"
+    wr, ar = np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3)
+    model = build_model("rigid", 10.0, 0.2)
+    made = provenance.describe(model=model, excitation="RickerPulse", grid={"omega_ratio": wr, "accel_ratio": ar})
+    z = np.zeros(9)
+    np.savez(f"{out}.checkpoint.npz", made_by=provenance.to_json(made), done=np.ones(9, bool), max_theta=z,
+             overturned=z.astype(bool), uplifted=z.astype(bool), status=z.astype(np.int32))
+    r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
+               "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet", "--pulse", "antisymmetric")
+    assert r.exit_code == 2, r.output
+    assert "excitation: RickerPulse → AntisymmetricRickerPulse" in r.output and "delete" in r.output
+    assert len(r.output.strip().splitlines()) == 1
+    r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
+               "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet")
+    assert r.exit_code == 0, r.output  # the run that made it resumes it (all cells done: max_theta 0)
+    assert "uplifted: 0" in r.output

@@ -77,6 +77,58 @@ def test_interrupted_run_resumes_without_recomputing_finished_batches(model, tmp
     assert np.array_equal(resumed.max_theta, full.max_theta) and not ck.exists()
 
 
+def _interrupted_checkpoint(model, ck, monkeypatch, **kw):
+    """A checkpoint left by a run killed in its second batch (one of three done)."""
+    real = spectra.run_batch
+    calls = []
+
+    def dies_on_second_batch(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise _Killed
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(spectra, "run_batch", dies_on_second_batch)
+    with pytest.raises(_Killed):
+        jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck, **kw)
+    monkeypatch.setattr(spectra, "run_batch", real)
+    assert ck.exists()
+
+
+@pytest.mark.parametrize(
+    "other, needle",
+    [
+        (dict(pulse="antisymmetric"), "excitation: RickerPulse → AntisymmetricRickerPulse"),
+        (dict(model=jr.RigidModel(jr.Block.from_slenderness(10.0, 0.25))), "model.block.b"),
+        (dict(model=jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2), eta=0.9)), "model structure"),
+        (dict(omega=W * 1.01), "grid omega_ratio"),
+    ],
+)
+def test_checkpoint_of_other_physics_is_refused_naming_what_differs(model, tmp_path, monkeypatch, other, needle):
+    """A symmetric-pulse checkpoint was once resumed by an antisymmetric run (568 of 576 cells,
+    383 of them wrong). Now a checkpoint records what made it; any difference is refused, before
+    any cell runs, with the difference named, and the file is left for the run that made it."""
+    ck = tmp_path / "spec.checkpoint.npz"
+    _interrupted_checkpoint(model, ck, monkeypatch)
+    m = other.get("model", model)
+    with pytest.raises(JaxrockInputError, match=needle) as e:
+        jr.overturning_spectrum(m, other.get("omega", W), A, progress=False, batch_size=12, checkpoint=ck,
+                                pulse=other.get("pulse", "symmetric"))
+    assert "delete" in str(e.value) and ck.exists()
+
+
+@pytest.mark.parametrize("content", [b"garbage", b"PK\x03\x04truncated", "missing-keys"])
+def test_unreadable_checkpoint_is_refused_in_one_line(model, tmp_path, content):
+    ck = tmp_path / "spec.checkpoint.npz"
+    if content == "missing-keys":
+        np.savez(ck, done=np.zeros(36, bool))
+    else:
+        ck.write_bytes(content)
+    with pytest.raises(JaxrockInputError, match="checkpoint .* (is unreadable|lacks)") as e:
+        jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck)
+    assert "\n" not in str(e.value) and "delete" in str(e.value)
+
+
 @pytest.mark.parametrize(
     "omega,accel,needle",
     [([], A, "omega_ratio"), (W[::-1], A, "increasing"), (W, [0.5, np.nan], "accel_ratio"), (W, [-1.0, 2.0], "accel_ratio")],

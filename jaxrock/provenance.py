@@ -1,0 +1,91 @@
+"""How a result was made: a description of everything that determines its numbers (package
+version, model and every parameter, excitation kind, grid, integrator settings), written into
+checkpoints and result files, and compared before a checkpoint is reused.
+
+A description is a flat dict of strings: ``{"jaxrock": "0.1.0", "model": "RigidModel",
+"model.block.height": "10.0", …}``. Array leaves of up to 8 numbers are written out; larger ones
+(a column's matrices, a grid) by their size and a SHA-256 digest of their bytes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from importlib import metadata
+from pathlib import Path
+
+import jax
+import numpy as np
+
+from ._validate import JaxrockInputError
+
+
+def package_version() -> str:
+    try:
+        return metadata.version("jaxrock")
+    except metadata.PackageNotFoundError:  # pragma: no cover - a source tree without an install
+        return "unknown"
+
+
+def _value(x) -> str:
+    a = np.asarray(x)
+    if a.size <= 8:
+        return np.array2string(a.ravel() if a.ndim else a, precision=17, separator=",")
+    return f"{a.dtype}{list(a.shape)} sha256:{hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()[:16]}"
+
+
+def _leaves(prefix: str, tree) -> dict[str, str]:
+    """Every array leaf of a pytree (an equinox Module) by its path, and its structure (static
+    fields such as a column's element count) as one entry."""
+    out = {prefix: type(tree).__name__}
+    leaves, treedef = jax.tree_util.tree_flatten_with_path(tree)
+    out[f"{prefix} structure"] = hashlib.sha256(str(treedef).encode()).hexdigest()[:16]
+    for path, leaf in leaves:
+        out[prefix + jax.tree_util.keystr(path)] = _value(leaf)
+    return out
+
+
+def describe(*, model, excitation: str, integrator=None, grid: dict | None = None) -> dict[str, str]:
+    """The description of a run: `excitation` names the excitation kind (and a record's content
+    digest); `grid` maps axis names to their values."""
+    d = {"jaxrock": package_version(), "excitation": excitation}
+    d.update(_leaves("model", model))
+    d["integrator"] = "the model's default" if integrator is None else repr(integrator)
+    for name, values in (grid or {}).items():
+        d[f"grid {name}"] = _value(values)
+    return d
+
+
+def differences(made: dict[str, str], wanted: dict[str, str]) -> list[str]:
+    """Names of the entries that differ (or exist on one side only), in a stable order."""
+    keys = sorted(set(made) | set(wanted))
+    return [k for k in keys if made.get(k) != wanted.get(k)]
+
+
+def to_json(d: dict[str, str]) -> str:
+    return json.dumps(d, sort_keys=True, ensure_ascii=False)
+
+
+def load_checkpoint(path: Path, wanted: dict[str, str], fields: tuple[str, ...]) -> dict:
+    """The arrays of a checkpoint made by the run `wanted` describes. Refused, with one line that
+    names the file, what differs and how to start afresh: an unreadable file, missing keys, or a
+    checkpoint of other physics."""
+    fresh = f"delete {path} to start afresh (or run with --no-checkpoint, or another --out)"
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+        made = json.loads(str(data["made_by"]))
+        missing = [k for k in ("done", *fields) if k not in data]
+    except Exception as e:  # a truncated zip, garbage, no made_by: all one answer
+        raise JaxrockInputError(f"checkpoint {path} is unreadable ({type(e).__name__}: {e}); {fresh}") from None
+    if missing:
+        raise JaxrockInputError(f"checkpoint {path} lacks {', '.join(missing)}; {fresh}")
+    diff = differences(made, wanted)
+    if diff:
+        shown = ", ".join(f"{k}: {made.get(k, '—')} → {wanted.get(k, '—')}" for k in diff[:3])
+        more = f" and {len(diff) - 3} more" if len(diff) > 3 else ""
+        raise JaxrockInputError(f"checkpoint {path} was made by a different run ({shown}{more}); {fresh}")
+    return data
+
+
+__all__ = ["describe", "differences", "load_checkpoint", "package_version", "to_json"]
