@@ -70,3 +70,24 @@ def check_grid(name: str, values, lo: float = 0.0) -> np.ndarray:
     if v.size > 1 and not np.all(np.diff(v) > 0):
         raise JaxrockInputError(f"{name} grid must be strictly increasing (got {v[:4]}...)")
     return v
+
+
+def check_writable(name: str, path) -> None:
+    """`path` can be written (its folder is created): probed by writing, not by permission bits,
+    so that a run fails here, before its work, not after it."""
+    import tempfile
+    from pathlib import Path
+
+    path = Path(path)
+    if path.is_dir():
+        raise JaxrockInputError(f"{name} {path}: is a folder; expected a file path")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".jaxrock-write-test-"):
+            pass
+        if path.exists():
+            open(path, "ab").close()
+    except OSError as e:
+        blocker = next((a for a in path.parents if a.exists()), None)
+        why = f"{blocker} is a file, not a folder" if blocker is not None and not blocker.is_dir() else (e.strerror or str(e))
+        raise JaxrockInputError(f"{name} {path}: cannot write there ({why}); choose another path") from None

@@ -57,6 +57,7 @@ the batch a row lands in can change the last digits.
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 import time
@@ -268,6 +269,17 @@ def _check_row(row: _Row, base: Path, cache: dict) -> tuple[object, object, str]
     return model, exc, f"{kind}/{exc_kind}"
 
 
+def _text(path: Path, what: str) -> io.StringIO:
+    """A CSV file's text, for `csv` (newline=""): a file that is not UTF-8 text is refused in one line."""
+    try:
+        text = Path(path).read_bytes().decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise JaxrockInputError(f"{path}: the {what} file is not UTF-8 text (byte {e.start}: {e.reason}); expected a CSV") from None
+    if "\x00" in text:
+        raise JaxrockInputError(f"{path}: the {what} file is binary (NUL bytes); expected a CSV")
+    return io.StringIO(text, newline="")
+
+
 def read_scenes(path) -> tuple[list[Scene], list[str]]:
     """Read and check every row of a scenes CSV (see the module docstring).
 
@@ -277,7 +289,7 @@ def read_scenes(path) -> tuple[list[Scene], list[str]]:
     path = Path(path)
     if not path.is_file():
         raise JaxrockInputError(f"{path}: scenes file not found")
-    with open(path, newline="", encoding="utf-8") as fh:
+    with _text(path, "scenes") as fh:
         reader = csv.reader(fh)
         try:
             header = next(reader)
@@ -385,7 +397,7 @@ def _read_done(results: Path, header: list[str], scenes: list[Scene]) -> dict[in
     done: dict[int, dict] = {}
     if not results.exists():
         return done
-    with open(results, newline="", encoding="utf-8") as fh:
+    with _text(results, "results") as fh:
         reader = csv.DictReader(fh)
         expected = ["row", *header, *RESULT_COLUMNS]
         if reader.fieldnames is None:

@@ -229,6 +229,7 @@ def spectrum(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
     """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
+    from ._validate import check_writable
     from .spectra import overturning_spectrum
 
     wr = _axis("omega", omega_min, omega_max, n_omega)
@@ -236,6 +237,8 @@ def spectrum(
     _check_count("--batch-size", batch_size)
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped)
     integ = _integrator(model, tol)
+    for suffix in (".nc", ".png"):
+        check_writable("--out", Path(f"{out}{suffix}"))
     ck = Path(f"{out}.checkpoint.npz") if checkpoint else None
     t0 = time.perf_counter()
     bs = even_batch(wr.size * ar.size, batch_size)
@@ -361,6 +364,10 @@ def simulate(
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta)
     exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio)
     integ = _integrator(model, tol)
+    if plot is not None:
+        from ._validate import check_writable
+
+        check_writable("--plot", plot)
     t0 = time.perf_counter()
     sol = _simulate(m, exc, integrator=integ)
     seconds = time.perf_counter() - t0
@@ -408,8 +415,10 @@ def batch(
     [scale], [eta], [cbar], [E], [rho], [zeta]. Results: the inputs plus max_theta, overturned,
     t_overturn, uplifted, t_uplift, n_impacts, status.
     """
+    from ._validate import check_writable
     from .batch import run_scenes
 
+    check_writable("results", results)
     rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet)
     typer.echo(
         f"{rep.n_rows} rows: {rep.n_run} run in {rep.n_groups} group(s), {rep.n_skipped} skipped (already done); "
@@ -446,7 +455,7 @@ def record_spectrum(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
     """Least scale factor of a record that overturns the body, per height (paper figure 10)."""
-    from ._validate import JaxrockInputError
+    from ._validate import JaxrockInputError, check_writable
     from .plotting import plot_record_spectrum
     from .spectra import record_overturning_scale
 
@@ -456,6 +465,8 @@ def record_spectrum(
         raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
     m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
     exc, desc = _excitation(m.block, "symmetric", record, 1.0, None, None, None, None)
+    for suffix in (".nc", ".csv", ".png"):
+        check_writable("--out", Path(f"{out}{suffix}"))
     t0 = time.perf_counter()
     rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet)
     seconds = time.perf_counter() - t0
@@ -492,14 +503,18 @@ def calibrate(
 ):
     """Calibrate the spring model's damper c̄ against the rigid model's η⁴ (paper eq. 17, figure 7)."""
     # Thin wrapper over jaxrock.calibration.calibration_report (owned by the calibration module).
-    from ._validate import check_range
+    from ._validate import JaxrockInputError, check_range, check_writable
     from .calibration import calibration_report
 
     _check_count("--max-iter", max_iter)
+    check_writable("--out", out / "calibration.csv")
     ta = None
     if tan_alphas is not None:
         ta = parse_values("--tan-alphas", tan_alphas)
         check_range("--tan-alphas", ta, 0.0, 1.0, lo_open=True, hi_open=True)
+        if np.unique(ta).size < 3:
+            raise JaxrockInputError(f"--tan-alphas = {tan_alphas!r}: {np.unique(ta).size} distinct value(s); "
+                                    "the power-law fit c̄ = k (α/0.1)^n needs at least 3")
     t0 = time.perf_counter()
     rep = calibration_report(out, tan_alphas=ta, progress=not quiet, max_iter=max_iter)
     typer.echo(rep.format_table())

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import math
 import re
+import time
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -347,3 +348,46 @@ def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
                "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet")
     assert r.exit_code == 0, r.output  # the run that made it resumes it (all cells done: max_theta 0)
     assert "uplifted: 0" in r.output
+
+
+# -- everything checked before the work ------------------------------------------------------------
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["spectrum", "--out", "{blocked}/spec"], "--out"),
+        (["simulate", "--plot", "{blocked}/x.png"], "--plot"),
+        (["batch", "{scenes}", "{blocked}/r.csv"], "results"),
+        (["record-spectrum", "--out", "{blocked}/rs"], "--out"),
+        (["calibrate", "--out", "{blocked}"], "--out"),
+    ],
+)
+def test_unwritable_output_fails_before_the_work(tmp_path, monkeypatch, args, name):
+    """An output path under a file cannot be written: one line naming the option and the blocking
+    file, exit 2, and no model was ever run (it failed after 17.7 s of computing)."""
+    blocked = tmp_path / "a_file"
+    blocked.write_text("x")
+    scenes = tmp_path / "scenes.csv"
+    scenes.write_text("height,tan_alpha,accel_ratio,omega_ratio\n10,0.2,3,4\n")
+    runs = []
+    monkeypatch.setattr(jr.model, "simulate", lambda *a, **k: runs.append(1))
+    monkeypatch.setattr("jaxrock.cli._simulate", lambda *a, **k: runs.append(1))
+    r = invoke(*[a.format(blocked=blocked, scenes=scenes) for a in args])
+    assert r.exit_code == 2, r.output
+    assert f"{name} " in r.output and "a_file is a file, not a folder" in r.output
+    assert len(r.output.strip().splitlines()) == 1 and not runs
+
+
+@pytest.mark.parametrize("content, needle", [(b"\x00\x01\xff\xfe", "not UTF-8 text"), (b"height,tan_alpha\x00\n", "binary (NUL bytes)")])
+def test_batch_binary_csv_is_one_line(tmp_path, content, needle):
+    scenes = tmp_path / "scenes.csv"
+    scenes.write_bytes(content)
+    r = invoke("batch", scenes, tmp_path / "r.csv")
+    assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
+
+
+def test_calibrate_needs_three_slendernesses_before_computing(tmp_path):
+    """Two values computed for 23 s, then failed in the power-law fit; now refused at once."""
+    t0 = time.perf_counter()
+    r = invoke("calibrate", "--tan-alphas", "0.15,0.25", "--out", tmp_path)
+    assert r.exit_code == 2 and "needs at least 3" in r.output, r.output
+    assert time.perf_counter() - t0 < 2.0
