@@ -261,7 +261,7 @@ def spectrum(
 # ----------------------------------------------------------------------------------------------
 # simulate
 # ----------------------------------------------------------------------------------------------
-def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio):
+def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio, units=None):
     from ._validate import JaxrockInputError, check_range
     from .spectra import PULSES
 
@@ -273,14 +273,18 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
         if record.lower() in ("elcentro", "el-centro", "el_centro"):
             from .records import el_centro
 
+            if units is not None:
+                raise JaxrockInputError("--units applies to --record files; the packaged El Centro record needs none")
             rec = el_centro()
         else:
             from .records import read_record
 
             if not Path(record).is_file():
                 raise JaxrockInputError(f"--record {record}: file not found")
-            rec = read_record(record)
+            rec = read_record(record) if units is None else read_record(record, units=units)
         return rec.scaled(scale), f"{rec.name} × {scale:g}"
+    if units is not None:
+        raise JaxrockInputError("--units applies to --record files, not to Ricker pulses")
     if a_p is not None and accel_ratio is not None:
         raise JaxrockInputError("give --a-p or --accel-ratio, not both")
     if omega_p is not None and omega_ratio is not None:
@@ -346,6 +350,8 @@ def simulate(
     omega_ratio: Optional[float] = typer.Option(None, help="pulse frequency as ω_p/p"),
     record: Optional[str] = typer.Option(None, help="a record file (.AT2 or two-column) or 'elcentro', instead of a pulse"),
     scale: float = typer.Option(1.0, help="factor on the record"),
+    units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
+                                 "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
     undamped: bool = typer.Option(False, "--undamped", help="η = 1 (rigid) or c̄ = 0 (spring)"),
     eta: Optional[float] = typer.Option(None, help="rigid: impact velocity ratio (default 1 − 1.5 sin²α)"),
     cbar: Optional[float] = typer.Option(None, help="spring: damper c̄ (default eq. 17)"),
@@ -362,7 +368,7 @@ def simulate(
     from .results import Save
 
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta)
-    exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio)
+    exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio, units)
     integ = _integrator(model, tol)
     if plot is not None:
         from ._validate import check_writable
@@ -450,6 +456,8 @@ def record_spectrum(
         "bisection. A coarse sweep is cheap (a vmapped record run costs about as much per lane as a bisection step) "
         "but can miss a narrow overturning window between two factors",
     ),
+    units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
+                                 "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
     refine: int = typer.Option(8, help="bisections refining the least overturning factor (resolution: sweep step / 2^refine)"),
     out: Path = typer.Option(Path("out/record_spectrum"), help="output stem: <out>.nc, <out>.csv, <out>.png"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
@@ -464,7 +472,7 @@ def record_spectrum(
     if refine < 0:
         raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
     m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
-    exc, desc = _excitation(m.block, "symmetric", record, 1.0, None, None, None, None)
+    exc, desc = _excitation(m.block, "symmetric", record, 1.0, None, None, None, None, units)
     for suffix in (".nc", ".csv", ".png"):
         check_writable("--out", Path(f"{out}{suffix}"))
     t0 = time.perf_counter()

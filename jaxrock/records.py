@@ -2,10 +2,10 @@
 
 Two formats are read:
 
-* PEER NGA `.AT2`: four header lines (the second names the event, the fourth gives `NPTS=` and
-  `DT=` [s]), then the accelerations [g] in rows of any length.
+* PEER NGA `.AT2`: four header lines (the second names the event, the third states the units,
+  the fourth gives `NPTS=` and `DT=` [s]), then the accelerations in rows of any length.
 * Two-column text: `time [s]  acceleration` per line, separated by whitespace or a comma, `#`
-  starting a comment; accelerations in g or m/s².
+  starting a comment; accelerations in g unless `units` says otherwise.
 
 Malformed files raise `JaxrockInputError` naming the file, the line and what is valid.
 """
@@ -23,12 +23,31 @@ from ._validate import JaxrockInputError
 from .excitation import Record
 from .geometry import G
 
-_UNITS = {"g": G, "m/s2": 1.0}  # factor to m/s²
+_UNITS = {"g": G, "m/s2": 1.0, "cm/s2": 0.01, "mm/s2": 1e-3, "in/s2": 0.0254, "ft/s2": 0.3048}  # factor to m/s²
+_UNITS_VALID = "g, m/s2, cm/s2 (gal), mm/s2, in/s2, ft/s2 (also written m/s/s, m/sec^2, m/s²)"
+# a header's statement of units: 'IN UNITS OF G.', 'UNITS OF CM/S/S', 'The units are (g)'
+_HEADER_UNITS = re.compile(r"\bUNITS\b\s*(?:OF|ARE|:|=)?\s*\(?\s*([A-Za-z][A-Za-z/0-9*^²]*)", re.IGNORECASE)
 _HEADER_LINES = 4
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[Ee][-+]?\d+)?"
 _NPTS = re.compile(r"\bNPTS\s*=\s*([-+]?\d+)", re.IGNORECASE)
 _DT = re.compile(rf"\bDT\s*=\s*({_NUMBER})", re.IGNORECASE)
 _UNIFORM_RTOL = 1e-6
+
+
+def _unit_key(units: str) -> str | None:
+    """The canonical name of an acceleration unit as written ('CM/SEC/SEC' → 'cm/s2'), or None."""
+    u = units.strip().lower().replace(" ", "").replace("²", "2").replace("**2", "2").replace("^2", "2")
+    u = u.replace("sec", "s").replace("/s/s", "/s2")
+    u = {"gal": "cm/s2", "gals": "cm/s2"}.get(u, u)
+    return u if u in _UNITS else None
+
+
+def unit_factor(units: str, source="units") -> float:
+    """Factor from `units` (see `_UNITS_VALID`) to m/s²; a unit it cannot interpret is refused."""
+    key = _unit_key(units)
+    if key is None:
+        raise JaxrockInputError(f"units = {units!r} (for {source}); valid units are {_UNITS_VALID}")
+    return _UNITS[key]
 
 
 def _split_lines(text: str) -> list[str]:
@@ -102,14 +121,37 @@ def _at2_npts_dt(line: str, source) -> tuple[int, float]:
     return npts, dt
 
 
-def read_at2(path: str | os.PathLike, *, name: str | None = None) -> Record:
-    """Read a PEER NGA `.AT2` acceleration file (values in g) into a `Record` in m/s².
+def _at2_units(lines: list[str], units: str | None, source) -> float:
+    """Factor to m/s² of an .AT2 file: the units its header states (first three lines: 'IN UNITS
+    OF G', 'UNITS OF CM/S/S', 'The units are (g)'), else `units`, else g (the PEER convention).
+    A stated unit it cannot interpret, or one that contradicts `units`, is refused."""
+    for lineno, line in enumerate(lines[: _HEADER_LINES - 1], start=1):
+        match = _HEADER_UNITS.search(line)
+        if match is None:
+            continue
+        stated = match.group(1)
+        key = _unit_key(stated)
+        if key is None:
+            raise JaxrockInputError(
+                f"{source}: line {lineno}: the header states units {stated!r}, which jaxrock cannot interpret; "
+                f"valid units are {_UNITS_VALID}"
+            )
+        if units is not None and _unit_key(units) != key:
+            raise JaxrockInputError(f"{source}: line {lineno}: the header states units {stated!r}, but units = {units!r} was given")
+        return _UNITS[key]
+    return G if units is None else unit_factor(units, source)
 
-    The file has four header lines (the second names the event; the fourth gives the number of
+
+def read_at2(path: str | os.PathLike, *, units: str | None = None, name: str | None = None) -> Record:
+    """Read a PEER NGA `.AT2` acceleration file into a `Record` in m/s².
+
+    The file has four header lines (the second names the event; the third states the units, as in
+    `ACCELERATION TIME HISTORY IN UNITS OF G` or `UNITS OF CM/S/S`; the fourth gives the number of
     samples and the time step [s], as in `NPTS=  4000, DT= .01000 SEC` or `NPTS= 4000 DT= 0.01`),
-    then exactly NPTS accelerations [g], any number per row, in free or Fortran format
-    (`.6403182E-02`, `0.00630`). `name` defaults to the event line (the second header line), or the
-    file's stem when that line is blank.
+    then exactly NPTS accelerations, any number per row, in free or Fortran format
+    (`.6403182E-02`, `0.00630`). Units are read from the header; `units` is used where the header
+    states none (default g) and must agree where it does. `name` defaults to the event line (the
+    second header line), or the file's stem when that line is blank.
     """
     source = Path(path)
     lines = _read_lines(source)
@@ -127,8 +169,9 @@ def read_at2(path: str | os.PathLike, *, name: str | None = None) -> Record:
             f"{source}: {values.size} values after the header, {fewer_more} than NPTS = {npts} "
             f"(line {_HEADER_LINES}); the file must hold exactly NPTS values"
         )
+    factor = _at2_units(lines, units, source)
     event = lines[1].strip()
-    return Record(values * G, dt, name=name or event or source.stem)
+    return Record(values * factor, dt, name=name or event or source.stem)
 
 
 def _uniform_step(times: np.ndarray, linenos: list[int], source) -> float:
@@ -153,8 +196,7 @@ def _uniform_step(times: np.ndarray, linenos: list[int], source) -> float:
 
 
 def _parse_two_column(lines: list[str], source, units: str, name: str) -> Record:
-    if units not in _UNITS:
-        raise JaxrockInputError(f"units = {units!r} (for {source}); valid units are {sorted(_UNITS)}")
+    factor = unit_factor(units, source)
     rows = _numeric_rows(lines, 1, source, comment="#")
     for lineno, row in rows:
         if row.size != 2:
@@ -167,14 +209,15 @@ def _parse_two_column(lines: list[str], source, units: str, name: str) -> Record
         )
     data = np.array([row for _, row in rows])
     dt = _uniform_step(data[:, 0], [lineno for lineno, _ in rows], source)
-    return Record(data[:, 1] * _UNITS[units], dt, name=name)
+    return Record(data[:, 1] * factor, dt, name=name)
 
 
 def read_two_column(path: str | os.PathLike, *, units: str = "g", name: str | None = None) -> Record:
     """Read a two-column text record, `time [s]  acceleration` per line, into a `Record` in m/s².
 
     Columns are separated by whitespace or a comma; `#` starts a comment (whole line or trailing);
-    blank lines are skipped. `units` is the acceleration unit: "g" or "m/s2". Time must be
+    blank lines are skipped. `units` is the acceleration unit (default g; also m/s2, cm/s2, mm/s2,
+    in/s2, ft/s2): the file cannot say it, so give it when it is not g. Time must be
     strictly increasing and uniform (every step within 1e-6 relative of the median step; the
     record's `dt` is the mean step). Time may start anywhere: the record is shifted so that its first sample
     is at t = 0. `name` defaults to the file's stem.
@@ -186,7 +229,8 @@ def read_two_column(path: str | os.PathLike, *, units: str = "g", name: str | No
 def read_record(path: str | os.PathLike, **kw) -> Record:
     """Read a record file: `.AT2` (any case) with `read_at2`, anything else with `read_two_column`.
 
-    Keyword arguments go to the chosen reader (`name`; `units` for two-column files).
+    Keyword arguments go to the chosen reader (`name`; `units`: for two-column files the unit,
+    default g; for .AT2 files the unit where the header states none, checked where it does).
     """
     reader = read_at2 if Path(path).suffix.lower() == ".at2" else read_two_column
     return reader(path, **kw)

@@ -391,3 +391,22 @@ def test_calibrate_needs_three_slendernesses_before_computing(tmp_path):
     r = invoke("calibrate", "--tan-alphas", "0.15,0.25", "--out", tmp_path)
     assert r.exit_code == 2 and "needs at least 3" in r.output, r.output
     assert time.perf_counter() - t0 < 2.0
+
+
+def test_record_units_option(tmp_path):
+    """A two-column file is read in g unless --units says otherwise: the same motion written in
+    m/s² and in cm/s² gives the same answer; --units on a pulse is refused."""
+    t = np.arange(200) * 0.01
+    acc = 3.0 * np.sin(2 * np.pi * t) * np.exp(-t)  # m/s²
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    a.write_text("".join(f"{x:.17g} {y:.17g}\n" for x, y in zip(t, acc)))
+    b.write_text("".join(f"{x:.17g} {100 * y:.17g}\n" for x, y in zip(t, acc)))
+    ra = invoke("simulate", "--record", a, "--units", "m/s2")
+    rb = invoke("simulate", "--record", b, "--units", "cm/s/s")
+    assert ra.exit_code == 0 and rb.exit_code == 0, (ra.output, rb.output)
+    peak = lambda out: float(re.search(r"max θ/α = ([0-9.]+)", out).group(1))
+    assert peak(ra.output) > 1e-3 and peak(ra.output) == pytest.approx(peak(rb.output), rel=1e-5)
+    r = invoke("simulate", "--units", "g")
+    assert r.exit_code == 2 and "--units applies to --record files" in r.output
+    r = invoke("simulate", "--record", a, "--units", "furlongs")
+    assert r.exit_code == 2 and "valid units are g, m/s2, cm/s2" in r.output

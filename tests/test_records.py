@@ -47,11 +47,19 @@ def test_shared_files_parse(rel):
     assert rec.n == npts
     assert float(rec.dt) == pytest.approx(dt, rel=1e-12)
     acc_g = np.asarray(rec.acc) / G
+    assert 0.01 < np.max(np.abs(acc_g)) < 3.0  # a unit read wrongly is off by 9.81 or 100
     if pga is not None:
         assert np.max(np.abs(acc_g)) == pytest.approx(pga, abs=5e-5)
     if path.suffix.lower() == ".at2":
         np.testing.assert_array_equal(acc_g * G, _naive_at2_values(path) * G)
         assert rec.name == _raw_lines(path)[1].strip()
+
+
+@needs_shared
+def test_every_shared_record_is_checked():
+    """Every file in shared/data/records (the real header variants) is in SHARED_FILES."""
+    present = {f"records/{p.name}" for p in (SHARED / "records").iterdir() if p.is_file() and p.suffix.lower() != ".md"}
+    assert present <= set(SHARED_FILES), present - set(SHARED_FILES)
 
 
 @needs_shared
@@ -221,8 +229,44 @@ def test_bad_two_column(tmp_path, case):
 
 def test_unknown_units(tmp_path):
     path = _write(tmp_path, "u.txt", "0 0.1\n0.01 0.2\n")
-    with pytest.raises(JaxrockInputError, match=r"units = 'cm/s2' .*valid units are \['g', 'm/s2'\]"):
-        read_two_column(path, units="cm/s2")
+    with pytest.raises(JaxrockInputError, match=r"units = 'furlong/s2' .*valid units are g, m/s2, cm/s2"):
+        read_two_column(path, units="furlong/s2")
+
+
+# --- units --------------------------------------------------------------------------------------
+# (written, factor to m/s²): the header or `units` spellings a user meets
+UNIT_SPELLINGS = [("G", G), ("g", G), ("CM/S/S", 0.01), ("CM/SEC/SEC", 0.01), ("cm/s^2", 0.01), ("gal", 0.01),
+                  ("M/S/S", 1.0), ("m/s²", 1.0), ("m/sec**2", 1.0), ("MM/S/S", 1e-3), ("IN/S/S", 0.0254), ("ft/s2", 0.3048)]
+
+
+@pytest.mark.parametrize("written, factor", UNIT_SPELLINGS)
+def test_at2_reads_the_units_its_header_states(tmp_path, written, factor):
+    """An AT2 whose header says 'UNITS OF CM/S/S' was read as g (the body overturned at 0.077 s):
+    the stated unit now scales the values, checked against the naive oracle times the factor."""
+    head = f"PEER\nTEST EVENT\nACCELERATION TIME HISTORY IN UNITS OF {written}. FILTER POINTS: HP=0.1 Hz\n"
+    path = _write(tmp_path, "u.AT2", head + "NPTS= 3, DT= .01\n 12.5 -30.0 4.0\n")
+    rec = read_record(path)
+    np.testing.assert_allclose(rec.acc, np.array([12.5, -30.0, 4.0]) * factor, rtol=1e-15)
+
+
+@pytest.mark.parametrize("written, factor", UNIT_SPELLINGS)
+def test_two_column_units_argument(tmp_path, written, factor):
+    rec = read_record(_write(tmp_path, "r.txt", "0 12.5\n0.01 -30\n"), units=written)
+    np.testing.assert_allclose(rec.acc, np.array([12.5, -30.0]) * factor, rtol=1e-15)
+
+
+def test_at2_units_refused_when_uninterpretable_or_contradicted(tmp_path):
+    path = _write(tmp_path, "f.AT2", "PEER\nEVENT\nIN UNITS OF FURLONGS/FORTNIGHT2\nNPTS= 2, DT= .01\n0.1 0.2\n")
+    with pytest.raises(JaxrockInputError, match=r"line 3: the header states units 'FURLONGS/FORTNIGHT2', which jaxrock cannot"):
+        read_record(path)
+    path = _write(tmp_path, "c.AT2", "PEER\nEVENT\nUNITS OF CM/S/S\nNPTS= 2, DT= .01\n0.1 0.2\n")
+    with pytest.raises(JaxrockInputError, match=r"states units 'CM/S/S', but units = 'g' was given"):
+        read_record(path, units="g")
+    assert float(read_record(path, units="gal").acc[0]) == pytest.approx(0.001, rel=1e-15)
+    # no statement: the PEER convention (g), or the unit given
+    path = _write(tmp_path, "n.AT2", "PEER\nEVENT\nno statement here\nNPTS= 2, DT= .01\n0.1 0.2\n")
+    assert float(read_record(path).acc[0]) == pytest.approx(0.1 * G, rel=1e-15)
+    assert float(read_record(path, units="m/s2").acc[0]) == pytest.approx(0.1, rel=1e-15)
 
 
 # --- pulses -------------------------------------------------------------------------------------
