@@ -68,6 +68,15 @@ def boundary_lines(spectrum) -> dict:
     }
 
 
+def _cell_edges(v: np.ndarray) -> np.ndarray:
+    """Edges of the cells centred on the grid values `v` (a lone value gets a ±5 % cell)."""
+    if v.size == 1:
+        half = 0.05 * abs(float(v[0])) or 0.05
+        return np.array([v[0] - half, v[0] + half])
+    mid = 0.5 * (v[1:] + v[:-1])
+    return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+
+
 def _draw_spectrum(ax, spectrum, title, *, colorbar=True):
     x = np.asarray(spectrum.omega_ratio, dtype=float)
     y = np.asarray(spectrum.accel_ratio, dtype=float)
@@ -82,9 +91,15 @@ def _draw_spectrum(ax, spectrum, title, *, colorbar=True):
                 x, y, over.astype(float), levels=[0.5, 1.5], colors=[OVERTURN_COLOR], hatches=["//"], alpha=1.0
             )
     else:  # a single row or column: contours need a 2-D grid, fall back to cells
-        cs = ax.pcolormesh(x, y, z, cmap=CMAP, norm=BoundaryNorm(LEVELS, 256), shading="nearest")
+        xe, ye = _cell_edges(x), _cell_edges(y)
+        cs = ax.pcolormesh(xe, ye, z, cmap=CMAP, norm=BoundaryNorm(LEVELS, 256), shading="flat")
         if over.any():
-            ax.pcolormesh(x, y, np.where(over, 1.0, np.nan), cmap=ListedColormap([OVERTURN_COLOR]), shading="nearest")
+            ax.pcolormesh(xe, ye, np.where(over, 1.0, np.nan), cmap=ListedColormap([OVERTURN_COLOR]), shading="flat")
+        if x.size * y.size == 1:  # one cell: its value, written on it
+            ax.text(x[0], y[0], f"θ_max/α = {float(spectrum.max_theta[0, 0]):.4g}" + ("\noverturned" if over[0, 0] else ""),
+                    ha="center", va="center", fontsize=10, color="k", bbox=dict(facecolor="w", alpha=0.8, lw=0))
+        ax.set_xlim(xe[0], xe[-1])
+        ax.set_ylim(ye[0], ye[-1])
     lines = boundary_lines(spectrum)
     ax.plot(lines["omega_ratio"], lines["uplift"], color="k", lw=2.5, label="uplift")
     # dashed black on a white line: visible on the colours and on the grey overturned region
@@ -95,9 +110,8 @@ def _draw_spectrum(ax, spectrum, title, *, colorbar=True):
         ax.plot(x[xx], y[yy], "rx", ms=4, label="solver status ≠ ok")
     ax.set_xlabel(X_LABEL)
     ax.set_ylabel(Y_LABEL)
-    if x.size > 1:
+    if x.size > 1 and y.size > 1:
         ax.set_xlim(x.min(), x.max())
-    if y.size > 1:
         ax.set_ylim(y.min(), y.max())
     ax.set_title(title if title is not None else _title_of(spectrum), fontsize=10)
     cb = None

@@ -81,6 +81,26 @@ def test_plot_spectrum_on_given_axes_and_degenerate_grid():
     plt.close(fig)
 
 
+@pytest.mark.parametrize("i", [0, 3, 9])  # below uplift, rocking, overturned
+def test_plot_spectrum_of_one_cell_draws_it_and_writes_its_value(i):
+    """A 1 × 1 grid drew an empty frame (a one-point axis gives pcolormesh no cell width): now the
+    cell is drawn ±5 % around its point, in its colour, with its value written on it."""
+    s = _spectrum()
+    one = Spectrum(omega_ratio=s.omega_ratio[4:5], accel_ratio=s.accel_ratio[i:i + 1], max_theta=s.max_theta[i:i + 1, 4:5],
+                   overturned=s.overturned[i:i + 1, 4:5], uplifted=s.uplifted[i:i + 1, 4:5], status=s.status[i:i + 1, 4:5],
+                   attrs=s.attrs)
+    fig = plot_spectrum(one)
+    ax = fig.axes[0]
+    cell = ax.collections[0]
+    assert np.asarray(cell.get_array()).ravel().tolist() == [pytest.approx(float(one.max_theta[0, 0]))]
+    x0, x1 = ax.get_xlim()
+    assert x0 < one.omega_ratio[0] < x1 and x1 - x0 == pytest.approx(0.1 * one.omega_ratio[0])
+    text = " ".join(t.get_text() for t in ax.texts)
+    assert f"θ_max/α = {float(one.max_theta[0, 0]):.4g}" in text
+    assert ("overturned" in text) == bool(one.overturned[0, 0])
+    plt.close(fig)
+
+
 def test_grid_and_boundaries_figures(tmp_path):
     s1, s2 = _spectrum(), _spectrum(shift=0.5)
     fig = plot_spectra_grid([s1, s2, s1], ["RM", "SM", "SM + masses"], path=tmp_path / "g.png")
