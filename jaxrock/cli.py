@@ -55,6 +55,15 @@ def _fail(msg: str):
     raise typer.Exit(EXIT_INPUT)
 
 
+def _history() -> str:
+    """The command line of this run, for a file's CF `history` attribute."""
+    import sys
+
+    from .provenance import command_line
+
+    return command_line(sys.argv[1:])
+
+
 def _exit_if_untrusted(status, what: str):
     """One line per failed status kind on stderr and exit code 1, when any run is not ok (the
     files were written; their status column says which)."""
@@ -244,7 +253,8 @@ def spectrum(
     bs = even_batch(wr.size * ar.size, batch_size)
     spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=bs, progress=not quiet, checkpoint=ck, refine=refine)
     seconds = time.perf_counter() - t0
-    spec = eqx.tree_at(lambda s: s.attrs, spec, {**spec.attrs, "model_kind": model.value, "undamped": int(undamped)})
+    spec = eqx.tree_at(lambda s: s.attrs, spec, {**spec.attrs, "model_kind": model.value, "undamped": int(undamped),
+                                                  "history": _history()})
     nc = spec.save(Path(f"{out}.nc"))
     from .plotting import plot_spectrum
 
@@ -478,7 +488,8 @@ def record_spectrum(
     t0 = time.perf_counter()
     rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet)
     seconds = time.perf_counter() - t0
-    rs = type(rs)(height=rs.height, scale=rs.scale, bracket_low=rs.bracket_low, attrs={**rs.attrs, "model_kind": model.value})
+    rs = type(rs)(height=rs.height, scale=rs.scale, bracket_low=rs.bracket_low,
+                  attrs={**rs.attrs, "model_kind": model.value, "history": _history()})
     out.parent.mkdir(parents=True, exist_ok=True)
     nc = rs.save(Path(f"{out}.nc"))
     csv_path = Path(f"{out}.csv")

@@ -56,6 +56,32 @@ def describe(*, model, excitation: str, integrator=None, grid: dict | None = Non
     return d
 
 
+def file_attrs(model, integrator=None) -> dict:
+    """Attributes that say how a result file was made: package and JAX versions, the integrator
+    and its settings, the model's energy loss (η of the rigid model or c̄ of the spring model) and
+    the full description (`describe`, as JSON in `made_by`)."""
+    attrs = {
+        "Conventions": "CF-1.8",
+        "source": f"jaxrock {package_version()} (jax {jax.__version__})",
+        "jaxrock_version": package_version(),
+        "jax_version": jax.__version__,
+        "integrator": repr(model.default_integrator() if integrator is None else integrator),
+    }
+    if hasattr(model, "restitution"):
+        attrs["eta"] = float(np.asarray(model.restitution))
+    if hasattr(model, "cbar"):
+        attrs["cbar"] = float(np.asarray(model.cbar))
+    return attrs
+
+
+def command_line(argv: list[str]) -> str:
+    """A CF `history` entry: UTC time and the command, quoted so that it can be pasted back."""
+    import shlex
+    from datetime import datetime, timezone
+
+    return f"{datetime.now(timezone.utc):%Y-%m-%dT%H:%M:%SZ} jaxrock " + " ".join(shlex.quote(a) for a in argv)
+
+
 def differences(made: dict[str, str], wanted: dict[str, str]) -> list[str]:
     """Names of the entries that differ (or exist on one side only), in a stable order."""
     keys = sorted(set(made) | set(wanted))
@@ -88,4 +114,4 @@ def load_checkpoint(path: Path, wanted: dict[str, str], fields: tuple[str, ...])
     return data
 
 
-__all__ = ["describe", "differences", "load_checkpoint", "package_version", "to_json"]
+__all__ = ["command_line", "describe", "differences", "file_attrs", "load_checkpoint", "package_version", "to_json"]

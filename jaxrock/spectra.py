@@ -30,6 +30,12 @@ from .results import STATUS_NAMES, Solution
 PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}
 
 
+def _flags(long_name: str, meanings, dtype=np.int8) -> dict:
+    """CF flag attributes: `flag_values` beside `flag_meanings` (and units 1)."""
+    return {"long_name": long_name, "units": "1", "flag_values": np.arange(len(meanings), dtype=dtype),
+            "flag_meanings": " ".join(meanings)}
+
+
 class Spectrum(eqx.Module):
     """A labelled overturning spectrum.
 
@@ -86,11 +92,11 @@ class Spectrum(eqx.Module):
         ds = xr.Dataset(
             {
                 "max_theta": (dims, self.max_theta, {"long_name": "max |theta|/alpha", "units": "1"}),
-                "overturned": (dims, self.overturned.astype(np.int8), {"long_name": "overturned (1) or not (0)"}),
-                "uplifted": (dims, self.uplifted.astype(np.int8), {"long_name": "uplifted (1) or not (0)"}),
-                "status": (dims, self.status.astype(np.int32), {"long_name": "jaxrock.Status code", "flag_meanings": " ".join(STATUS_NAMES)}),
-                "uplift_boundary": (("omega_ratio",), self.uplift_boundary, {"long_name": "least a_p/(g tan alpha) that uplifts"}),
-                "overturn_boundary": (("omega_ratio",), self.overturn_boundary, {"long_name": "least a_p/(g tan alpha) that overturns"}),
+                "overturned": (dims, self.overturned.astype(np.int8), _flags("overturned", ("no", "overturned"))),
+                "uplifted": (dims, self.uplifted.astype(np.int8), _flags("uplifted", ("no", "uplifted"))),
+                "status": (dims, self.status.astype(np.int32), _flags("jaxrock.Status code", STATUS_NAMES, np.int32)),
+                "uplift_boundary": (("omega_ratio",), self.uplift_boundary, {"long_name": "least a_p/(g tan alpha) that uplifts", "units": "1"}),
+                "overturn_boundary": (("omega_ratio",), self.overturn_boundary, {"long_name": "least a_p/(g tan alpha) that overturns", "units": "1"}),
             },
             coords={
                 "omega_ratio": ("omega_ratio", self.omega_ratio, {"long_name": "omega_p/p", "units": "1"}),
@@ -319,6 +325,8 @@ def overturning_spectrum(
         "p": p,
         "height": float(block.height),
         "width": float(block.width),
+        **provenance.file_attrs(model, integrator),
+        "made_by": provenance.to_json(made_by),
     }
     spec = Spectrum(
         omega_ratio=wr,
@@ -394,8 +402,8 @@ class RecordSpectrum(eqx.Module):
         path.parent.mkdir(parents=True, exist_ok=True)
         xr.Dataset(
             {
-                "scale": (("height",), self.scale, {"long_name": "least overturning scale factor"}),
-                "bracket_low": (("height",), self.bracket_low, {"long_name": "largest scale below it that does not overturn"}),
+                "scale": (("height",), self.scale, {"long_name": "least overturning scale factor", "units": "1"}),
+                "bracket_low": (("height",), self.bracket_low, {"long_name": "largest scale below it that does not overturn", "units": "1"}),
             },
             coords={"height": ("height", self.height, {"long_name": "2h", "units": "m"})},
             attrs={k: str(v) for k, v in self.attrs.items()},
@@ -446,5 +454,6 @@ def record_overturning_scale(
             else:
                 lo = mid
         least[i], low[i] = hi, lo
-    attrs = {"model": type(model).__name__, "record": record.name, "tan_alpha": float(tan_a), "tan_alpha_base": float(tan_b)}
+    attrs = {"model": type(model).__name__, "record": record.name, "tan_alpha": float(tan_a), "tan_alpha_base": float(tan_b),
+             **provenance.file_attrs(model, integrator)}
     return RecordSpectrum(height=hs, scale=least, bracket_low=low, attrs=attrs)

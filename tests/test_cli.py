@@ -410,3 +410,30 @@ def test_record_units_option(tmp_path):
     assert r.exit_code == 2 and "--units applies to --record files" in r.output
     r = invoke("simulate", "--record", a, "--units", "furlongs")
     assert r.exit_code == 2 and "valid units are g, m/s2, cm/s2" in r.output
+
+
+def test_spectrum_file_says_how_it_was_made(tmp_path):
+    """Units on every variable and coordinate, CF flag_values beside flag_meanings, c̄ (or η),
+    the integrator, the versions and the command line."""
+    import xarray as xr
+
+    out = tmp_path / "spec"
+    r = invoke("spectrum", "--model", "spring", "--n-omega", 2, "--n-accel", 2, "--omega-min", 2, "--omega-max", 6,
+               "--accel-min", 0.8, "--accel-max", 6, "--tol", 1e-6, "--refine", 0, "--out", out, "--quiet")
+    assert r.exit_code == 0, r.output
+    with xr.open_dataset(tmp_path / "spec.nc", engine="scipy") as ds:
+        for name in [*ds.data_vars, *ds.coords]:
+            assert ds[name].attrs.get("units") == "1", name
+        for name in ("overturned", "uplifted", "status"):
+            values, meanings = ds[name].attrs["flag_values"], ds[name].attrs["flag_meanings"].split()
+            assert len(np.atleast_1d(values)) == len(meanings) and list(np.atleast_1d(values)) == list(range(len(meanings)))
+        assert ds["status"].attrs["flag_meanings"].split()[0] == "ok"
+        a = ds.attrs
+        assert a["Conventions"].startswith("CF-") and a["jaxrock_version"] and a["jax_version"]
+        assert "GeneralizedAlpha(" in a["integrator"] and "rtol=1e-06" in a["integrator"]
+        model = jr.SpringModel(jr.Block.from_slenderness(10.0, 0.2))
+        assert a["cbar"] == pytest.approx(float(model.cbar), rel=1e-15)
+        assert re.match(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ jaxrock ", a["history"])
+    rigid = overturning_spectrum(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2), eta=0.9), [2.0, 3.0], [2.0, 3.0],
+                                 progress=False)
+    assert rigid.attrs["eta"] == pytest.approx(0.9) and "EventIntegrator(" in rigid.attrs["integrator"]
