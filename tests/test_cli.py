@@ -15,6 +15,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 import pytest
+import typer
 from typer.testing import CliRunner
 
 import jaxrock as jr
@@ -437,3 +438,32 @@ def test_spectrum_file_says_how_it_was_made(tmp_path):
     rigid = overturning_spectrum(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2), eta=0.9), [2.0, 3.0], [2.0, 3.0],
                                  progress=False)
     assert rigid.attrs["eta"] == pytest.approx(0.9) and "EventIntegrator(" in rigid.attrs["integrator"]
+
+
+# -- huge work is estimated, and refused without --yes ---------------------------------------------
+def test_huge_grid_is_refused_with_an_estimate_unless_yes():
+    """10⁴ × 10⁴ cells showed an ETA of 41–124 h and took 5 GB: now one line with the estimate
+    (from the measured cost per cell) and exit 2, before anything is allocated or compiled."""
+    t0 = time.perf_counter()
+    r = invoke("spectrum", "--n-omega", 10_000, "--n-accel", 10_000)
+    assert r.exit_code == 2, r.output
+    assert "100,000,000 cells: about 5.3 h and 6.4 GB (at 0.19 ms each" in r.output and "--yes" in r.output
+    assert len(r.output.strip().splitlines()) == 1 and time.perf_counter() - t0 < 2.0
+    # the gate itself: --yes lets the same work through; a flexible grid is dearer per cell
+    from jaxrock.cli import _estimate
+
+    _estimate(10**8, "rigid", yes=True)
+    _estimate(800_000, "spring-flexible", yes=True)  # 56 min: announced, allowed
+    with pytest.raises(typer.Exit):
+        _estimate(900_000, "spring-flexible", yes=False)  # 63 min
+    _estimate(900_000, "rigid", yes=False)  # 2.9 min
+
+
+def test_huge_list_option_is_refused():
+    r = invoke("record-spectrum", "--heights", "1:2:100000000")
+    assert r.exit_code == 2 and "n = 100000000 values; valid: at most 100000" in r.output, r.output
+
+
+def test_huge_record_sweep_is_refused_with_an_estimate():
+    r = invoke("record-spectrum", "--heights", "1:20:10000")
+    assert r.exit_code == 2 and "240,000 record runs: about" in r.output and "--yes" in r.output, r.output
