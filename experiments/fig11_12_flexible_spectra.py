@@ -30,7 +30,7 @@ for tan_a in (0.1, 0.2):
     titles.append(f"quasi-rigid SM, tanα = {tan_a}")
     for h in heights:
         m = jr.SpringModel(jr.Block.from_slenderness(h, tan_a), jr.Column.concrete(), n_elements=args.n_elements)
-        s = jr.overturning_spectrum(m, w, a, checkpoint=out / f"fig11_{h:g}m_tan{tan_a}.checkpoint.npz")
+        s = jr.overturning_spectrum(m, w, a, checkpoint=out / f"fig11_{h:g}m_tan{tan_a}.checkpoint")
         s.save(out / f"fig11_{h:g}m_tan{tan_a}.nc")
         spectra.append(s)
         titles.append(f"concrete 2h = {h:g} m, tanα = {tan_a}")

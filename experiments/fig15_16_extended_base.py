@@ -31,7 +31,7 @@ for pulse in ("symmetric", "antisymmetric"):
         titles.append("RM (rigid column + base)")
         for h in heights:
             m = jr.SpringModel(jr.Block.from_slenderness(h, tan_a, 0.3), jr.Column.concrete(), n_elements=args.n_elements)
-            s = jr.overturning_spectrum(m, w, a, pulse=pulse, checkpoint=out / f"fig15_{pulse}_{h:g}m_tan{tan_a}.checkpoint.npz")
+            s = jr.overturning_spectrum(m, w, a, pulse=pulse, checkpoint=out / f"fig15_{pulse}_{h:g}m_tan{tan_a}.checkpoint")
             s.save(out / f"fig15_{pulse}_{h:g}m_tan{tan_a}.nc")
             spectra.append(s)
             titles.append(f"concrete 2h = {h:g} m")

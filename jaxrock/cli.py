@@ -82,6 +82,22 @@ def _estimate(n_cells: int, kind: str, yes: bool, what: str = "cells", per_cell:
         typer.echo(f"{est}, plus compilation", err=True)
 
 
+def _interrupted(ck: Optional[Path], n_cells: int):
+    """Ctrl-C: keep the finished batches, remove half-written files, say how to resume; exit 130."""
+    import shlex
+    import sys
+
+    from .provenance import checkpoint_cells, remove_temporaries
+
+    if ck is not None and ck.is_dir():
+        remove_temporaries(ck)
+        kept = checkpoint_cells(ck)
+        typer.echo(f"interrupted: {kept:,} of {n_cells:,} cells kept in {ck}; resume with: jaxrock {shlex.join(sys.argv[1:])}", err=True)
+    else:
+        typer.echo("interrupted: nothing kept (run with --checkpoint to keep finished batches)", err=True)
+    raise typer.Exit(130)
+
+
 def _history() -> str:
     """The command line of this run, for a file's CF `history` attribute."""
     import sys
@@ -260,7 +276,7 @@ def spectrum(
     n_accel: int = typer.Option(48, help="number of a_p/(g tanα) values"),
     out: Path = typer.Option(Path("out/spectrum"), help="output stem: writes <out>.nc (netCDF) and <out>.png"),
     undamped: bool = typer.Option(False, "--undamped", help="no energy loss: η = 1 (rigid) or c̄ = 0 (spring)"),
-    checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in <out>.checkpoint.npz; a rerun resumes"),
+    checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in the folder <out>.checkpoint; a rerun resumes"),
     batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into equal batches"),
     refine: int = typer.Option(10, min=0, max=40, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
     tol: Optional[float] = typer.Option(
@@ -282,10 +298,14 @@ def spectrum(
         check_writable("--out", Path(f"{out}{suffix}"))
     kind = "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value
     _estimate(wr.size * ar.size, kind, yes)
-    ck = Path(f"{out}.checkpoint.npz") if checkpoint else None
+    ck = Path(f"{out}.checkpoint") if checkpoint else None
     t0 = time.perf_counter()
     bs = even_batch(wr.size * ar.size, batch_size)
-    spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=bs, progress=not quiet, checkpoint=ck, refine=refine)
+    try:
+        spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=bs, progress=not quiet,
+                                    checkpoint=ck, refine=refine)
+    except KeyboardInterrupt:
+        _interrupted(ck, wr.size * ar.size)
     seconds = time.perf_counter() - t0
     spec = eqx.tree_at(lambda s: s.attrs, spec, {**spec.attrs, "model_kind": model.value, "undamped": int(undamped),
                                                   "history": _history()})
@@ -518,10 +538,10 @@ def record_spectrum(
         raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
     m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
     exc, desc = _excitation(m.block, "symmetric", record, 1.0, None, None, None, None, units)
-    per_run = RECORD_RUN_SECONDS * CELL_SECONDS[model.value] / CELL_SECONDS["rigid"] * float(exc.t_end - exc.t_start) / 40.0
-    _estimate(hs.size * (sc.size + refine), model.value, yes, what="record runs", per_cell=per_run)
     for suffix in (".nc", ".csv", ".png"):
         check_writable("--out", Path(f"{out}{suffix}"))
+    per_run = RECORD_RUN_SECONDS * CELL_SECONDS[model.value] / CELL_SECONDS["rigid"] * float(exc.t_end - exc.t_start) / 40.0
+    _estimate(hs.size * (sc.size + refine), model.value, yes, what="record runs", per_cell=per_run)
     t0 = time.perf_counter()
     rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet)
     seconds = time.perf_counter() - t0

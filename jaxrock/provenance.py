@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from importlib import metadata
 from pathlib import Path
 
@@ -92,26 +93,71 @@ def to_json(d: dict[str, str]) -> str:
     return json.dumps(d, sort_keys=True, ensure_ascii=False)
 
 
-def load_checkpoint(path: Path, wanted: dict[str, str], fields: tuple[str, ...]) -> dict:
-    """The arrays of a checkpoint made by the run `wanted` describes. Refused, with one line that
-    names the file, what differs and how to start afresh: an unreadable file, missing keys, or a
-    checkpoint of other physics."""
+def load_checkpoint(path: Path, wanted: dict[str, str], fields: tuple[str, ...]) -> list[tuple[slice, dict]]:
+    """The finished batches (cell slice, arrays) of a checkpoint folder made by the run `wanted`
+    describes. Refused, with one line that names the file, what differs and how to start afresh:
+    an unreadable description or batch, missing keys, or a checkpoint of other physics."""
+    path = Path(path)
     fresh = f"delete {path} to start afresh (or run with --no-checkpoint, or another --out)"
     try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-        made = json.loads(str(data["made_by"]))
-        missing = [k for k in ("done", *fields) if k not in data]
-    except Exception as e:  # a truncated zip, garbage, no made_by: all one answer
+        made = json.loads((path / "made_by.json").read_text(encoding="utf-8"))
+        if not isinstance(made, dict):
+            raise ValueError("not a description")
+    except Exception as e:  # not a folder, no or garbled description: all one answer
         raise JaxrockInputError(f"checkpoint {path} is unreadable ({type(e).__name__}: {e}); {fresh}") from None
-    if missing:
-        raise JaxrockInputError(f"checkpoint {path} lacks {', '.join(missing)}; {fresh}")
     diff = differences(made, wanted)
     if diff:
         shown = ", ".join(f"{k}: {made.get(k, '—')} → {wanted.get(k, '—')}" for k in diff[:3])
         more = f" and {len(diff) - 3} more" if len(diff) > 3 else ""
         raise JaxrockInputError(f"checkpoint {path} was made by a different run ({shown}{more}); {fresh}")
-    return data
+    batches = []
+    for f in sorted(path.glob("batch_*.npz")):
+        try:
+            with np.load(f, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except Exception as e:  # a truncated or garbled batch
+            raise JaxrockInputError(f"checkpoint {f} is unreadable ({type(e).__name__}: {e}); {fresh}") from None
+        missing = [k for k in ("start", "stop", *fields) if k not in data]
+        if missing:
+            raise JaxrockInputError(f"checkpoint {f} lacks {', '.join(missing)}; {fresh}")
+        batches.append((slice(int(data["start"]), int(data["stop"])), data))
+    return batches
 
 
-__all__ = ["command_line", "describe", "differences", "file_attrs", "load_checkpoint", "package_version", "to_json"]
+def append_checkpoint(path: Path, made_by: dict[str, str], cells: slice, arrays: dict) -> None:
+    """Add one finished batch to a checkpoint folder (its own file, written to a temporary name
+    and renamed: an interruption never leaves a half-written batch, and nothing is rewritten)."""
+    path = Path(path)
+    path.mkdir(parents=True, exist_ok=True)
+    meta = path / "made_by.json"
+    if not meta.exists():
+        tmp = path / "made_by.tmp"
+        tmp.write_text(to_json(made_by), encoding="utf-8")
+        os.replace(tmp, meta)
+    tmp = path / f"batch_{cells.start:012d}.tmp.npz"
+    np.savez(tmp, start=cells.start, stop=cells.stop, **arrays)
+    os.replace(tmp, path / f"batch_{cells.start:012d}.npz")
+
+
+def checkpoint_cells(path: Path) -> int:
+    """Cells kept in a checkpoint folder (0 if there is none or it is unreadable)."""
+    n = 0
+    for f in Path(path).glob("batch_*.npz"):
+        if f.name.endswith(".tmp.npz"):
+            continue
+        try:
+            with np.load(f, allow_pickle=False) as z:
+                n += int(z["stop"]) - int(z["start"])
+        except Exception:
+            pass
+    return n
+
+
+def remove_temporaries(path: Path) -> None:
+    """Remove what an interrupted write left in a checkpoint folder (its finished batches stay)."""
+    for f in [*Path(path).glob("*.tmp.npz"), *Path(path).glob("*.tmp")]:
+        f.unlink(missing_ok=True)
+
+
+__all__ = ["append_checkpoint", "checkpoint_cells", "command_line", "describe", "differences", "file_attrs", "load_checkpoint", "package_version",
+           "remove_temporaries", "to_json"]

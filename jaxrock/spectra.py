@@ -11,6 +11,7 @@ uplift line, rocking near the overturning line) do not make the whole batch wait
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import equinox as eqx
@@ -266,8 +267,9 @@ def overturning_spectrum(
 
     - `pulse`: "symmetric" (Ricker) or "antisymmetric" (eq. 29).
     - `batch_size`: cells run together in one vmapped batch (memory bound).
-    - `checkpoint`: a file (.npz) where finished batches are kept; rerunning the same call after an
-      interruption resumes from it, and it is removed when the spectrum is complete. It records
+    - `checkpoint`: a folder where each finished batch is added as its own file (nothing is
+      rewritten); rerunning the same call after an interruption resumes from it, and it is
+      removed when the spectrum is complete. It records
       what made it (`jaxrock.provenance`): one of another run (model, parameters, pulse, grid,
       integrator, version) or an unreadable one is refused with a `JaxrockInputError`.
     - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
@@ -290,10 +292,11 @@ def overturning_spectrum(
     made_by = provenance.describe(model=model, excitation=cls.__name__, integrator=integrator,
                                   grid={"omega_ratio": wr, "accel_ratio": ar})
     if ck is not None and ck.exists():
-        saved = provenance.load_checkpoint(ck, made_by, fields)
-        done = saved["done"]
-        for k in fields:
-            out[k] = saved[k]
+        provenance.remove_temporaries(ck) if ck.is_dir() else None
+        for cells, saved in provenance.load_checkpoint(ck, made_by, fields):
+            done[cells] = True
+            for k in fields:
+                out[k][cells] = saved[k]
     batch_size = min(int(batch_size), _memory_batch(model, integrator))
     starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
     bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
@@ -307,14 +310,11 @@ def overturning_spectrum(
         out["status"][sl] = np.asarray(sol.status._value)
         done[sl] = True
         if ck is not None:
-            ck.parent.mkdir(parents=True, exist_ok=True)
-            tmp = ck.with_suffix(".tmp.npz")
-            np.savez(tmp, made_by=provenance.to_json(made_by), done=done, **out)
-            os.replace(tmp, ck)
+            provenance.append_checkpoint(ck, made_by, sl, {k: out[k][sl] for k in fields})
         bar.update(sl.stop - sl.start)
     bar.close()
     if ck is not None and ck.exists():
-        ck.unlink()
+        shutil.rmtree(ck)
     shape = (ar.size, wr.size)
     attrs = {
         "model": type(model).__name__,

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import math
 import re
+from pathlib import Path
 import time
 
 import equinox as eqx
@@ -38,7 +39,7 @@ def test_spectrum_writes_nc_equal_to_library_and_png(tmp_path):
                "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet")
     assert r.exit_code == 0, r.output
     assert (tmp_path / "spec.png").stat().st_size > 1000
-    assert not (tmp_path / "spec.checkpoint.npz").exists()  # removed once complete
+    assert not (tmp_path / "spec.checkpoint").exists()  # removed once complete
     spec = Spectrum.load(tmp_path / "spec.nc")
     model = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
     ref = overturning_spectrum(model, np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3), batch_size=9, progress=False)
@@ -338,8 +339,8 @@ def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
     model = build_model("rigid", 10.0, 0.2)
     made = provenance.describe(model=model, excitation="RickerPulse", grid={"omega_ratio": wr, "accel_ratio": ar})
     z = np.zeros(9)
-    np.savez(f"{out}.checkpoint.npz", made_by=provenance.to_json(made), done=np.ones(9, bool), max_theta=z,
-             overturned=z.astype(bool), uplifted=z.astype(bool), status=z.astype(np.int32))
+    provenance.append_checkpoint(Path(f"{out}.checkpoint"), made, slice(0, 9), dict(
+        max_theta=z, overturned=z.astype(bool), uplifted=z.astype(bool), status=z.astype(np.int32)))
     r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
                "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet", "--pulse", "antisymmetric")
     assert r.exit_code == 2, r.output
@@ -467,3 +468,37 @@ def test_huge_list_option_is_refused():
 def test_huge_record_sweep_is_refused_with_an_estimate():
     r = invoke("record-spectrum", "--heights", "1:20:10000")
     assert r.exit_code == 2 and "240,000 record runs: about" in r.output and "--yes" in r.output, r.output
+
+
+def test_interrupted_spectrum_keeps_its_batches_and_says_how_to_resume(tmp_path, monkeypatch):
+    """Ctrl-C in the second of three batches: exit 130, the first batch kept in the checkpoint
+    folder (its own file; no temporary left), one line with the command that resumes; the rerun
+    computes the two other batches only and equals the library's spectrum."""
+    from jaxrock import spectra
+
+    out = tmp_path / "spec"
+    args = ["spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6, "--accel-min", 0.8,
+            "--accel-max", 6, "--out", out, "--quiet", "--batch-size", 3, "--refine", 0]
+    real, calls = spectra.run_batch, []
+
+    def interrupted_in_second_batch(*a, **k):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(spectra, "run_batch", interrupted_in_second_batch)
+    r = invoke(*args)
+    assert r.exit_code == 130, r.output
+    assert "interrupted: 3 of 9 cells kept in" in r.output and "resume with: jaxrock" in r.output
+    ck = Path(f"{out}.checkpoint")
+    assert sorted(f.name for f in ck.iterdir()) == ["batch_000000000000.npz", "made_by.json"]
+    monkeypatch.setattr(spectra, "run_batch", real)
+    calls.clear()
+    monkeypatch.setattr(spectra, "run_batch", lambda *a, **k: (calls.append(1), real(*a, **k))[1])
+    r = invoke(*args)
+    assert r.exit_code == 0, r.output
+    assert len(calls) == 2 and not ck.exists()
+    ref = overturning_spectrum(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), np.linspace(1.5, 6, 3),
+                               np.linspace(0.8, 6, 3), progress=False)
+    np.testing.assert_allclose(Spectrum.load(tmp_path / "spec.nc").max_theta, ref.max_theta, rtol=0, atol=1e-12)

@@ -55,7 +55,7 @@ class _Killed(Exception):
 
 
 def test_interrupted_run_resumes_without_recomputing_finished_batches(model, tmp_path, monkeypatch):
-    ck = tmp_path / "spec.checkpoint.npz"
+    ck = tmp_path / "spec.checkpoint"
     full = jr.overturning_spectrum(model, W, A, progress=False, batch_size=12)
     calls, killed = [], []
     real = spectra.run_batch
@@ -108,7 +108,7 @@ def test_checkpoint_of_other_physics_is_refused_naming_what_differs(model, tmp_p
     """A symmetric-pulse checkpoint was once resumed by an antisymmetric run (568 of 576 cells,
     383 of them wrong). Now a checkpoint records what made it; any difference is refused, before
     any cell runs, with the difference named, and the file is left for the run that made it."""
-    ck = tmp_path / "spec.checkpoint.npz"
+    ck = tmp_path / "spec.checkpoint"
     _interrupted_checkpoint(model, ck, monkeypatch)
     m = other.get("model", model)
     with pytest.raises(JaxrockInputError, match=needle) as e:
@@ -117,13 +117,20 @@ def test_checkpoint_of_other_physics_is_refused_naming_what_differs(model, tmp_p
     assert "delete" in str(e.value) and ck.exists()
 
 
-@pytest.mark.parametrize("content", [b"garbage", b"PK\x03\x04truncated", "missing-keys"])
-def test_unreadable_checkpoint_is_refused_in_one_line(model, tmp_path, content):
-    ck = tmp_path / "spec.checkpoint.npz"
-    if content == "missing-keys":
-        np.savez(ck, done=np.zeros(36, bool))
+@pytest.mark.parametrize("damage", ["a file", "garbled description", "truncated batch", "batch without keys"])
+def test_unreadable_checkpoint_is_refused_in_one_line(model, tmp_path, monkeypatch, damage):
+    ck = tmp_path / "spec.checkpoint"
+    if damage == "a file":
+        ck.write_bytes(b"PK\x03\x04truncated")
     else:
-        ck.write_bytes(content)
+        _interrupted_checkpoint(model, ck, monkeypatch)
+        batch = next(ck.glob("batch_*.npz"))
+        if damage == "garbled description":
+            (ck / "made_by.json").write_text("{not json")
+        elif damage == "truncated batch":
+            batch.write_bytes(batch.read_bytes()[:100])
+        else:
+            np.savez(batch, start=0, stop=12)
     with pytest.raises(JaxrockInputError, match="checkpoint .* (is unreadable|lacks)") as e:
         jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck)
     assert "\n" not in str(e.value) and "delete" in str(e.value)
