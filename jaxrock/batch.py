@@ -58,6 +58,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import math
 import os
 import time
@@ -70,6 +71,7 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
+from . import provenance
 from ._validate import JaxrockInputError, check_range
 from .excitation import Record
 from .geometry import Block
@@ -437,11 +439,25 @@ def _pad_size(k: int, chunk: int) -> int:
     return min(chunk, max(_MIN_PAD, 1 << max(0, (k - 1).bit_length())))
 
 
+def _description(scenes: list[Scene]) -> dict[str, str]:
+    """What determines a batch's numbers beyond each row's own inputs (which the results file
+    holds): the package version, the integrators (each model's default) and every record's content."""
+    d = {"jaxrock": provenance.package_version(), "integrator": "each model's default"}
+    for s in scenes:
+        if isinstance(s.excitation, Record):
+            name = f"record {s.values.get('pulse', '')}"
+            if name not in d:
+                d[name] = provenance.value_text(np.concatenate([np.ravel(s.excitation.acc), np.ravel(s.excitation.dt)]))
+    return d
+
+
 def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: int = 256, progress: bool = True) -> BatchReport:
     """Run every scene of `scenes_path` and write `results_path` (see the module docstring).
 
     All rows are checked first (a `JaxrockInputError` names the first bad row and column).
-    Results are appended per chunk; with `resume`, rows already in `results_path` are skipped.
+    Results are appended per chunk; with `resume`, rows already in `results_path` are skipped,
+    once `<results>.made_by.json` shows they were made by this package version from the same
+    record contents (else a `JaxrockInputError` names the difference).
     """
     if int(chunk_size) < 1:
         raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
@@ -451,7 +467,16 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
     results = Path(results_path)
     if results.resolve() == Path(scenes_path).resolve():
         raise JaxrockInputError(f"{results}: the results file must not be the scenes file")
+    made_by = _description(scenes)
+    sidecar = results.with_name(results.name + ".made_by.json")
     done = _read_done(results, header, scenes) if resume else {}
+    if done:
+        fresh = "run without --resume to start afresh, or write another results file"
+        try:
+            made = json.loads(sidecar.read_text(encoding="utf-8"))
+        except Exception as e:
+            raise JaxrockInputError(f"{results}: no readable {sidecar.name} saying how it was made ({type(e).__name__}); {fresh}") from None
+        provenance.refuse_if_different(made, made_by, f"{results}", fresh)
     fields = ["row", *header, *RESULT_COLUMNS]
     clash = [h for h in header if h.lower() in ("row", *RESULT_COLUMNS)]
     if clash:
@@ -466,6 +491,9 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
     if not (resume and results.exists() and done):
         with open(results, "w", newline="", encoding="utf-8") as fh:
             csv.DictWriter(fh, fieldnames=fields).writeheader()
+        tmp = sidecar.with_name(sidecar.name + ".tmp")
+        tmp.write_text(provenance.to_json(made_by), encoding="utf-8")
+        os.replace(tmp, sidecar)
     bar = tqdm(total=len(scenes), initial=len(scenes) - len(todo), unit="scene", desc="batch", disable=not progress)
     new: dict[int, dict] = {}
     for members in groups.values():

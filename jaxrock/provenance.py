@@ -28,7 +28,7 @@ def package_version() -> str:
         return "unknown"
 
 
-def _value(x) -> str:
+def value_text(x) -> str:
     a = np.asarray(x)
     if a.size <= 8:
         return np.array2string(a.ravel() if a.ndim else a, precision=17, separator=",")
@@ -42,7 +42,7 @@ def _leaves(prefix: str, tree) -> dict[str, str]:
     leaves, treedef = jax.tree_util.tree_flatten_with_path(tree)
     out[f"{prefix} structure"] = hashlib.sha256(str(treedef).encode()).hexdigest()[:16]
     for path, leaf in leaves:
-        out[prefix + jax.tree_util.keystr(path)] = _value(leaf)
+        out[prefix + jax.tree_util.keystr(path)] = value_text(leaf)
     return out
 
 
@@ -53,7 +53,7 @@ def describe(*, model, excitation: str, integrator=None, grid: dict | None = Non
     d.update(_leaves("model", model))
     d["integrator"] = "the model's default" if integrator is None else repr(integrator)
     for name, values in (grid or {}).items():
-        d[f"grid {name}"] = _value(values)
+        d[f"grid {name}"] = value_text(values)
     return d
 
 
@@ -83,6 +83,15 @@ def command_line(argv: list[str]) -> str:
     return f"{datetime.now(timezone.utc):%Y-%m-%dT%H:%M:%SZ} jaxrock " + " ".join(shlex.quote(a) for a in argv)
 
 
+def refuse_if_different(made: dict[str, str], wanted: dict[str, str], what: str, fresh: str) -> None:
+    """One line naming up to three differences between how `what` was made and this run."""
+    diff = differences(made, wanted)
+    if diff:
+        shown = ", ".join(f"{k}: {made.get(k, '—')} → {wanted.get(k, '—')}" for k in diff[:3])
+        more = f" and {len(diff) - 3} more" if len(diff) > 3 else ""
+        raise JaxrockInputError(f"{what} was made by a different run ({shown}{more}); {fresh}")
+
+
 def differences(made: dict[str, str], wanted: dict[str, str]) -> list[str]:
     """Names of the entries that differ (or exist on one side only), in a stable order."""
     keys = sorted(set(made) | set(wanted))
@@ -105,11 +114,7 @@ def load_checkpoint(path: Path, wanted: dict[str, str], fields: tuple[str, ...])
             raise ValueError("not a description")
     except Exception as e:  # not a folder, no or garbled description: all one answer
         raise JaxrockInputError(f"checkpoint {path} is unreadable ({type(e).__name__}: {e}); {fresh}") from None
-    diff = differences(made, wanted)
-    if diff:
-        shown = ", ".join(f"{k}: {made.get(k, '—')} → {wanted.get(k, '—')}" for k in diff[:3])
-        more = f" and {len(diff) - 3} more" if len(diff) > 3 else ""
-        raise JaxrockInputError(f"checkpoint {path} was made by a different run ({shown}{more}); {fresh}")
+    refuse_if_different(made, wanted, f"checkpoint {path}", fresh)
     batches = []
     for f in sorted(path.glob("batch_*.npz")):
         try:
@@ -159,5 +164,5 @@ def remove_temporaries(path: Path) -> None:
         f.unlink(missing_ok=True)
 
 
-__all__ = ["append_checkpoint", "checkpoint_cells", "command_line", "describe", "differences", "file_attrs", "load_checkpoint", "package_version",
-           "remove_temporaries", "to_json"]
+__all__ = ["append_checkpoint", "checkpoint_cells", "command_line", "describe", "differences", "file_attrs", "load_checkpoint",
+           "package_version", "refuse_if_different", "remove_temporaries", "to_json", "value_text"]

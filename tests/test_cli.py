@@ -502,3 +502,32 @@ def test_interrupted_spectrum_keeps_its_batches_and_says_how_to_resume(tmp_path,
     ref = overturning_spectrum(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), np.linspace(1.5, 6, 3),
                                np.linspace(0.8, 6, 3), progress=False)
     np.testing.assert_allclose(Spectrum.load(tmp_path / "spec.nc").max_theta, ref.max_theta, rtol=0, atol=1e-12)
+
+
+def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, monkeypatch):
+    """A results file carries how it was made (<results>.made_by.json): resuming after the record
+    file's content changed (same name, same row inputs), or under another package version, is
+    refused with one line naming it; a results file with no description is refused too."""
+    from jaxrock import provenance
+
+    rec = tmp_path / "rec.txt"
+    t = np.arange(100) * 0.02
+    rec.write_text("".join(f"{x:.17g} {0.3 * np.sin(3 * x):.17g}\n" for x in t))
+    scenes = _write(tmp_path / "scenes.csv", "height,tan_alpha,pulse,scale\n10,0.2,rec.txt,1\n5,0.2,rec.txt,2\n")
+    res = tmp_path / "results.csv"
+    r = invoke("batch", scenes, res, "--quiet")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "results.csv.made_by.json").is_file()
+    assert invoke("batch", scenes, res, "--resume", "--quiet").exit_code == 0  # same run: resumes
+    rec.write_text("".join(f"{x:.17g} {0.4 * np.sin(3 * x):.17g}\n" for x in t))
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 2 and "made by a different run (record rec.txt:" in r.output, r.output
+    assert len(r.output.strip().splitlines()) == 1
+    rec.write_text("".join(f"{x:.17g} {0.3 * np.sin(3 * x):.17g}\n" for x in t))
+    version = provenance.package_version()
+    monkeypatch.setattr(provenance, "package_version", lambda: "9.9.9")
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 2 and f"jaxrock: {version} → 9.9.9" in r.output, r.output
+    (tmp_path / "results.csv.made_by.json").unlink()
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 2 and "saying how it was made" in r.output, r.output
