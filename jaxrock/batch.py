@@ -58,7 +58,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import os
 import time
@@ -472,11 +471,7 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
     done = _read_done(results, header, scenes) if resume else {}
     if done:
         fresh = "run without --resume to start afresh, or write another results file"
-        try:
-            made = json.loads(sidecar.read_text(encoding="utf-8"))
-        except Exception as e:
-            raise JaxrockInputError(f"{results}: no readable {sidecar.name} saying how it was made ({type(e).__name__}); {fresh}") from None
-        provenance.refuse_if_different(made, made_by, f"{results}", fresh)
+        provenance.check_description(sidecar, made_by, f"{results}", fresh)
     fields = ["row", *header, *RESULT_COLUMNS]
     clash = [h for h in header if h.lower() in ("row", *RESULT_COLUMNS)]
     if clash:
@@ -491,9 +486,7 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
     if not (resume and results.exists() and done):
         with open(results, "w", newline="", encoding="utf-8") as fh:
             csv.DictWriter(fh, fieldnames=fields).writeheader()
-        tmp = sidecar.with_name(sidecar.name + ".tmp")
-        tmp.write_text(provenance.to_json(made_by), encoding="utf-8")
-        os.replace(tmp, sidecar)
+        provenance.write_description(sidecar, made_by)
     bar = tqdm(total=len(scenes), initial=len(scenes) - len(todo), unit="scene", desc="batch", disable=not progress)
     new: dict[int, dict] = {}
     for members in groups.values():

@@ -107,18 +107,22 @@ def _history() -> str:
     return command_line(sys.argv[1:])
 
 
-def _exit_if_untrusted(status, what: str):
-    """One line per failed status kind on stderr and exit code 1, when any run is not ok (the
-    files were written; their status column says which)."""
+def _status_counts(status) -> dict[str, int]:
+    """Status name → number of runs, from (an array of) status codes."""
     from .results import STATUS_NAMES
 
     counts = np.bincount(np.ravel(np.asarray(status)), minlength=len(STATUS_NAMES))
-    bad = [(STATUS_NAMES[k], int(c)) for k, c in enumerate(counts) if c and STATUS_NAMES[k] != "ok"]
-    if not bad:
-        return
-    for name, c in bad:
+    return {STATUS_NAMES[k]: int(c) for k, c in enumerate(counts) if c}
+
+
+def _exit_if_untrusted(counts: dict[str, int], what: str):
+    """One line per failed status kind on stderr and exit code 1, when any run is not ok (the
+    files were written; their status column says which)."""
+    bad = {name: c for name, c in counts.items() if name != "ok"}
+    for name, c in bad.items():
         typer.echo(f"Warning: {c} {what} ended with status {name}: {STATUS_ADVICE[name]}", err=True)
-    raise typer.Exit(EXIT_UNTRUSTED)
+    if bad:
+        raise typer.Exit(EXIT_UNTRUSTED)
 
 
 def _handles_input_errors(fn):
@@ -319,7 +323,7 @@ def spectrum(
     plt.close(fig)
     typer.echo(spectrum_summary(spec, seconds))
     typer.echo(f"wrote {nc} and {out}.png")
-    _exit_if_untrusted(spec.status, "cell(s)")
+    _exit_if_untrusted(_status_counts(spec.status), "cell(s)")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -463,7 +467,7 @@ def simulate(
         fig = plot_history(hist, exc, model=m, path=plot, title=f"{model.value}, 2h = {height:g} m, tanα = {tan_alpha:g}\n{desc}")
         plt.close(fig)
         typer.echo(f"wrote {plot}")
-    _exit_if_untrusted(sol.status._value, "run")
+    _exit_if_untrusted(_status_counts(sol.status._value), "run")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -496,11 +500,7 @@ def batch(
     )
     typer.echo(f"overturned: {rep.n_overturned}; status: " + ", ".join(f"{k} {v}" for k, v in rep.status_counts.items()))
     typer.echo(f"wrote {rep.path}")
-    bad = {k: v for k, v in rep.status_counts.items() if k != "ok"}
-    for name, c in bad.items():
-        typer.echo(f"Warning: {c} row(s) ended with status {name}: {STATUS_ADVICE[name]}", err=True)
-    if bad:
-        raise typer.Exit(EXIT_UNTRUSTED)
+    _exit_if_untrusted(rep.status_counts, "row(s)")
 
 
 # ----------------------------------------------------------------------------------------------

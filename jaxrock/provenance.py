@@ -102,21 +102,39 @@ def to_json(d: dict[str, str]) -> str:
     return json.dumps(d, sort_keys=True, ensure_ascii=False)
 
 
+def write_description(file: Path, d: dict[str, str]) -> None:
+    """Write a description (JSON) under a temporary name and rename it: never half-written."""
+    file = Path(file)
+    tmp = file.with_name(f"tmp_{file.name}")
+    tmp.write_text(to_json(d), encoding="utf-8")
+    os.replace(tmp, file)
+
+
+def check_description(file: Path, wanted: dict[str, str], what: str, fresh: str) -> None:
+    """Refuse, in one line, `what` unless its description `file` is readable and equals `wanted`."""
+    try:
+        made = json.loads(Path(file).read_text(encoding="utf-8"))
+        if not isinstance(made, dict):
+            raise ValueError("not a description")
+    except Exception as e:  # missing, not a folder, garbled: all one answer
+        raise JaxrockInputError(f"{what}: no readable description {Path(file).name} ({type(e).__name__}: {e}); {fresh}") from None
+    refuse_if_different(made, wanted, what, fresh)
+
+
+def _batch_files(path: Path) -> list[Path]:
+    # temporaries are named tmp_…, so they never match
+    return sorted(Path(path).glob("batch_*.npz"))
+
+
 def load_checkpoint(path: Path, wanted: dict[str, str], fields: tuple[str, ...]) -> list[tuple[slice, dict]]:
     """The finished batches (cell slice, arrays) of a checkpoint folder made by the run `wanted`
     describes. Refused, with one line that names the file, what differs and how to start afresh:
     an unreadable description or batch, missing keys, or a checkpoint of other physics."""
     path = Path(path)
     fresh = f"delete {path} to start afresh (or run with --no-checkpoint, or another --out)"
-    try:
-        made = json.loads((path / "made_by.json").read_text(encoding="utf-8"))
-        if not isinstance(made, dict):
-            raise ValueError("not a description")
-    except Exception as e:  # not a folder, no or garbled description: all one answer
-        raise JaxrockInputError(f"checkpoint {path} is unreadable ({type(e).__name__}: {e}); {fresh}") from None
-    refuse_if_different(made, wanted, f"checkpoint {path}", fresh)
+    check_description(path / "made_by.json", wanted, f"checkpoint {path}", fresh)
     batches = []
-    for f in sorted(path.glob("batch_*.npz")):
+    for f in _batch_files(path):
         try:
             with np.load(f, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}
@@ -134,22 +152,17 @@ def append_checkpoint(path: Path, made_by: dict[str, str], cells: slice, arrays:
     and renamed: an interruption never leaves a half-written batch, and nothing is rewritten)."""
     path = Path(path)
     path.mkdir(parents=True, exist_ok=True)
-    meta = path / "made_by.json"
-    if not meta.exists():
-        tmp = path / "made_by.tmp"
-        tmp.write_text(to_json(made_by), encoding="utf-8")
-        os.replace(tmp, meta)
-    tmp = path / f"batch_{cells.start:012d}.tmp.npz"
-    np.savez(tmp, start=cells.start, stop=cells.stop, **arrays)
-    os.replace(tmp, path / f"batch_{cells.start:012d}.npz")
+    if not (path / "made_by.json").exists():
+        write_description(path / "made_by.json", made_by)
+    name = f"batch_{cells.start:012d}.npz"
+    np.savez(path / f"tmp_{name}", start=cells.start, stop=cells.stop, **arrays)
+    os.replace(path / f"tmp_{name}", path / name)
 
 
 def checkpoint_cells(path: Path) -> int:
     """Cells kept in a checkpoint folder (0 if there is none or it is unreadable)."""
     n = 0
-    for f in Path(path).glob("batch_*.npz"):
-        if f.name.endswith(".tmp.npz"):
-            continue
+    for f in _batch_files(path):
         try:
             with np.load(f, allow_pickle=False) as z:
                 n += int(z["stop"]) - int(z["start"])
@@ -160,9 +173,9 @@ def checkpoint_cells(path: Path) -> int:
 
 def remove_temporaries(path: Path) -> None:
     """Remove what an interrupted write left in a checkpoint folder (its finished batches stay)."""
-    for f in [*Path(path).glob("*.tmp.npz"), *Path(path).glob("*.tmp")]:
+    for f in Path(path).glob("tmp_*"):
         f.unlink(missing_ok=True)
 
 
-__all__ = ["append_checkpoint", "checkpoint_cells", "command_line", "describe", "differences", "file_attrs", "load_checkpoint",
-           "package_version", "refuse_if_different", "remove_temporaries", "to_json", "value_text"]
+__all__ = ["append_checkpoint", "check_description", "checkpoint_cells", "command_line", "describe", "differences", "file_attrs", "load_checkpoint",
+           "package_version", "refuse_if_different", "remove_temporaries", "to_json", "value_text", "write_description"]

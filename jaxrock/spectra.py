@@ -292,7 +292,6 @@ def overturning_spectrum(
     made_by = provenance.describe(model=model, excitation=cls.__name__, integrator=integrator,
                                   grid={"omega_ratio": wr, "accel_ratio": ar})
     if ck is not None and ck.exists():
-        provenance.remove_temporaries(ck) if ck.is_dir() else None
         for cells, saved in provenance.load_checkpoint(ck, made_by, fields):
             done[cells] = True
             for k in fields:

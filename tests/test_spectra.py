@@ -131,7 +131,7 @@ def test_unreadable_checkpoint_is_refused_in_one_line(model, tmp_path, monkeypat
             batch.write_bytes(batch.read_bytes()[:100])
         else:
             np.savez(batch, start=0, stop=12)
-    with pytest.raises(JaxrockInputError, match="checkpoint .* (is unreadable|lacks)") as e:
+    with pytest.raises(JaxrockInputError, match="checkpoint .*(is unreadable|lacks|no readable description made_by.json)") as e:
         jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck)
     assert "\n" not in str(e.value) and "delete" in str(e.value)
 
