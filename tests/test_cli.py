@@ -319,9 +319,11 @@ def test_spectrum_failed_cells_exit_1_after_writing(tmp_path):
     assert Spectrum.load(tmp_path / "spec.nc").status.ravel().tolist() == [jr.Status.solver_failed._value.item()]
 
 
+@pytest.mark.slow
 def test_calibrate_not_converged_exits_1(tmp_path):
     """Two optimiser iterations cannot meet the calibration's stopping test: every slenderness is
-    named on one line and the exit code is 1 (was 0, with converged=False only in the CSV)."""
+    named on one line and the exit code is 1 (was 0, with converged=False only in the CSV).
+    A real calibration (21–30 s): slow; the default run checks the decision on a given report."""
     r = invoke("calibrate", "--tan-alphas", "0.1,0.2,0.3", "--max-iter", 2, "--out", tmp_path, "--quiet")
     assert r.exit_code == 1, r.output
     assert "did not converge in --max-iter 2 iterations at tanα = 0.1, 0.2, 0.3 (3 of 3)" in r.output
@@ -350,6 +352,27 @@ def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
                "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet")
     assert r.exit_code == 0, r.output  # the run that made it resumes it (all cells done: max_theta 0)
     assert "uplifted: 0" in r.output
+
+
+def test_calibrate_names_the_slendernesses_that_did_not_converge(tmp_path, monkeypatch):
+    """The CLI's decision on a calibration report (the real run is the slow test above): exit 1
+    and one line naming the unconverged slendernesses; a fully converged report exits 0."""
+    import jaxrock.calibration as cal
+
+    class Report:
+        files: dict = {}
+
+        def __init__(self, converged):
+            self.table = [dict(tan_alpha=t, converged=c) for t, c in zip((0.1, 0.2, 0.3), converged)]
+
+        def format_table(self):
+            return "table"
+
+    for converged, code in (((True, False, False), 1), ((True, True, True), 0)):
+        monkeypatch.setattr(cal, "calibration_report", lambda *a, _c=converged, **k: Report(_c))
+        r = invoke("calibrate", "--tan-alphas", "0.1,0.2,0.3", "--max-iter", 5, "--out", tmp_path, "--quiet")
+        assert r.exit_code == code, r.output
+        assert ("did not converge in --max-iter 5 iterations at tanα = 0.2, 0.3 (2 of 3)" in r.output) == (code == 1)
 
 
 # -- everything checked before the work ------------------------------------------------------------
@@ -420,7 +443,7 @@ def test_spectrum_file_says_how_it_was_made(tmp_path):
     import xarray as xr
 
     out = tmp_path / "spec"
-    r = invoke("spectrum", "--model", "spring", "--n-omega", 2, "--n-accel", 2, "--omega-min", 2, "--omega-max", 6,
+    r = invoke("spectrum", "--model", "spring", "--n-omega", 2, "--n-accel", 3, "--omega-min", 2, "--omega-max", 6,
                "--accel-min", 0.8, "--accel-max", 6, "--tol", 1e-6, "--refine", 0, "--out", out, "--quiet")
     assert r.exit_code == 0, r.output
     with xr.open_dataset(tmp_path / "spec.nc", engine="scipy") as ds:
@@ -436,9 +459,11 @@ def test_spectrum_file_says_how_it_was_made(tmp_path):
         model = jr.SpringModel(jr.Block.from_slenderness(10.0, 0.2))
         assert a["cbar"] == pytest.approx(float(model.cbar), rel=1e-15)
         assert re.match(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ jaxrock ", a["history"])
-    rigid = overturning_spectrum(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2), eta=0.9), [2.0, 3.0], [2.0, 3.0],
-                                 progress=False)
-    assert rigid.attrs["eta"] == pytest.approx(0.9) and "EventIntegrator(" in rigid.attrs["integrator"]
+    # the model, grid and batch of test_spectrum_writes_nc_equal_to_library_and_png: its program is reused
+    rigid_model = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
+    rigid = overturning_spectrum(rigid_model, np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3), batch_size=9, progress=False)
+    assert rigid.attrs["eta"] == pytest.approx(float(rigid_model.restitution), rel=1e-15)
+    assert "EventIntegrator(" in rigid.attrs["integrator"]
 
 
 # -- huge work is estimated, and refused without --yes ---------------------------------------------
