@@ -1,0 +1,250 @@
+"""The command line's guards: failed runs exit 1 with advice, bad input and other runs' files are
+refused before the work, huge work is estimated first, interruptions keep their work and say how
+to resume, record units, readable help (issue 18). Split from test_cli.py so that the two files
+run on separate workers."""
+
+from __future__ import annotations
+
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import typer
+
+import jaxrock as jr
+from jaxrock.spectra import Spectrum, overturning_spectrum
+from test_cli import _write, invoke
+
+# -- honest exits: a run that is not ok exits 1 with a line saying what to change -----------------
+def test_simulate_failed_status_exits_1_with_advice():
+    """Generalized-α at 1e-14 cannot meet its tolerance on the step ladder: status solver_failed
+    (as in test_generalized_alpha's unreachable-tolerance test). The summary is printed, then one
+    line on what to change, and the exit code is 1 (was 0)."""
+    r = invoke("simulate", "--model", "spring", "--tol", 1e-14, "--accel-ratio", 3)
+    assert r.exit_code == 1, r.output
+    assert "status: solver_failed" in r.output
+    assert "1 run ended with status solver_failed" in r.output and "loosen --tol" in r.output
+    r = invoke("simulate", "--model", "spring", "--tol", 1e-6, "--accel-ratio", 3)
+    assert r.exit_code == 0, r.output
+    assert "Warning" not in r.output
+
+
+def test_spectrum_failed_cells_exit_1_after_writing(tmp_path):
+    out = tmp_path / "spec"
+    r = invoke("spectrum", "--model", "spring", "--tol", 1e-14, "--n-omega", 1, "--n-accel", 1, "--accel-min", 3,
+               "--omega-min", 2, "--refine", 0, "--out", out, "--quiet")
+    assert r.exit_code == 1, r.output
+    assert "1 cell(s) ended with status solver_failed" in r.output
+    assert Spectrum.load(tmp_path / "spec.nc").status.ravel().tolist() == [jr.Status.solver_failed._value.item()]
+
+
+@pytest.mark.slow
+def test_calibrate_not_converged_exits_1(tmp_path):
+    """Two optimiser iterations cannot meet the calibration's stopping test: every slenderness is
+    named on one line and the exit code is 1 (was 0, with converged=False only in the CSV).
+    A real calibration (21–30 s): slow; the default run checks the decision on a given report."""
+    r = invoke("calibrate", "--tan-alphas", "0.1,0.2,0.3", "--max-iter", 2, "--out", tmp_path, "--quiet")
+    assert r.exit_code == 1, r.output
+    assert "did not converge in --max-iter 2 iterations at tanα = 0.1, 0.2, 0.3 (3 of 3)" in r.output
+
+
+def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
+    """The checkpoint of an interrupted symmetric run, rerun as antisymmetric with the same --out:
+    exit 2 and one line naming the difference, before any cell runs (it resumed the symmetric
+    cells and labelled them antisymmetric)."""
+    from jaxrock import provenance
+    from jaxrock.cli import build_model
+
+    out = tmp_path / "spec"
+    wr, ar = np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3)
+    model = build_model("rigid", 10.0, 0.2)
+    made = provenance.describe(model=model, excitation="RickerPulse", grid={"omega_ratio": wr, "accel_ratio": ar})
+    z = np.zeros(9)
+    provenance.append_checkpoint(Path(f"{out}.checkpoint"), made, slice(0, 9), dict(
+        max_theta=z, overturned=z.astype(bool), uplifted=z.astype(bool), status=z.astype(np.int32)))
+    r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
+               "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet", "--pulse", "antisymmetric")
+    assert r.exit_code == 2, r.output
+    assert "excitation: RickerPulse → AntisymmetricRickerPulse" in r.output and "delete" in r.output
+    assert len(r.output.strip().splitlines()) == 1
+    r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
+               "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet")
+    assert r.exit_code == 0, r.output  # the run that made it resumes it (all cells done: max_theta 0)
+    assert "uplifted: 0" in r.output
+
+
+def test_calibrate_names_the_slendernesses_that_did_not_converge(tmp_path, monkeypatch):
+    """The CLI's decision on a calibration report (the real run is the slow test above): exit 1
+    and one line naming the unconverged slendernesses; a fully converged report exits 0."""
+    import jaxrock.calibration as cal
+
+    class Report:
+        files: dict = {}
+
+        def __init__(self, converged):
+            self.table = [dict(tan_alpha=t, converged=c) for t, c in zip((0.1, 0.2, 0.3), converged)]
+
+        def format_table(self):
+            return "table"
+
+    for converged, code in (((True, False, False), 1), ((True, True, True), 0)):
+        monkeypatch.setattr(cal, "calibration_report", lambda *a, _c=converged, **k: Report(_c))
+        r = invoke("calibrate", "--tan-alphas", "0.1,0.2,0.3", "--max-iter", 5, "--out", tmp_path, "--quiet")
+        assert r.exit_code == code, r.output
+        assert ("did not converge in --max-iter 5 iterations at tanα = 0.2, 0.3 (2 of 3)" in r.output) == (code == 1)
+
+
+# -- everything checked before the work ------------------------------------------------------------
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["spectrum", "--out", "{blocked}/spec"], "--out"),
+        (["simulate", "--plot", "{blocked}/x.png"], "--plot"),
+        (["batch", "{scenes}", "{blocked}/r.csv"], "results"),
+        (["record-spectrum", "--out", "{blocked}/rs"], "--out"),
+        (["calibrate", "--out", "{blocked}"], "--out"),
+    ],
+)
+def test_unwritable_output_fails_before_the_work(tmp_path, monkeypatch, args, name):
+    """An output path under a file cannot be written: one line naming the option and the blocking
+    file, exit 2, and no model was ever run (it failed after 17.7 s of computing)."""
+    blocked = tmp_path / "a_file"
+    blocked.write_text("x")
+    scenes = tmp_path / "scenes.csv"
+    scenes.write_text("height,tan_alpha,accel_ratio,omega_ratio\n10,0.2,3,4\n")
+    runs = []
+    monkeypatch.setattr(jr.model, "simulate", lambda *a, **k: runs.append(1))
+    monkeypatch.setattr("jaxrock.cli._simulate", lambda *a, **k: runs.append(1))
+    r = invoke(*[a.format(blocked=blocked, scenes=scenes) for a in args])
+    assert r.exit_code == 2, r.output
+    assert f"{name} " in r.output and "a_file is a file, not a folder" in r.output
+    assert len(r.output.strip().splitlines()) == 1 and not runs
+
+
+@pytest.mark.parametrize("content, needle", [(b"\x00\x01\xff\xfe", "not UTF-8 text"), (b"height,tan_alpha\x00\n", "binary (NUL bytes)")])
+def test_batch_binary_csv_is_one_line(tmp_path, content, needle):
+    scenes = tmp_path / "scenes.csv"
+    scenes.write_bytes(content)
+    r = invoke("batch", scenes, tmp_path / "r.csv")
+    assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
+
+
+def test_calibrate_needs_three_slendernesses_before_computing(tmp_path):
+    """Two values computed for 23 s, then failed in the power-law fit; now refused at once."""
+    t0 = time.perf_counter()
+    r = invoke("calibrate", "--tan-alphas", "0.15,0.25", "--out", tmp_path)
+    assert r.exit_code == 2 and "needs at least 3" in r.output, r.output
+    assert time.perf_counter() - t0 < 2.0
+
+
+def test_record_units_option(tmp_path):
+    """A two-column file is read in g unless --units says otherwise: the same motion written in
+    m/s² and in cm/s² gives the same answer; --units on a pulse is refused."""
+    t = np.arange(200) * 0.01
+    acc = 3.0 * np.sin(2 * np.pi * t) * np.exp(-t)  # m/s²
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    a.write_text("".join(f"{x:.17g} {y:.17g}\n" for x, y in zip(t, acc)))
+    b.write_text("".join(f"{x:.17g} {100 * y:.17g}\n" for x, y in zip(t, acc)))
+    ra = invoke("simulate", "--record", a, "--units", "m/s2")
+    rb = invoke("simulate", "--record", b, "--units", "cm/s/s")
+    assert ra.exit_code == 0 and rb.exit_code == 0, (ra.output, rb.output)
+    peak = lambda out: float(re.search(r"max θ/α = ([0-9.]+)", out).group(1))
+    assert peak(ra.output) > 1e-3 and peak(ra.output) == pytest.approx(peak(rb.output), rel=1e-5)
+    r = invoke("simulate", "--units", "g")
+    assert r.exit_code == 2 and "--units applies to --record files" in r.output
+    r = invoke("simulate", "--record", a, "--units", "furlongs")
+    assert r.exit_code == 2 and "valid units are g, m/s2, cm/s2" in r.output
+
+
+# -- huge work is estimated, and refused without --yes ---------------------------------------------
+def test_huge_grid_is_refused_with_an_estimate_unless_yes():
+    """10⁴ × 10⁴ cells showed an ETA of 41–124 h and took 5 GB: now one line with the estimate
+    (from the measured cost per cell) and exit 2, before anything is allocated or compiled."""
+    t0 = time.perf_counter()
+    r = invoke("spectrum", "--n-omega", 10_000, "--n-accel", 10_000)
+    assert r.exit_code == 2, r.output
+    assert "100,000,000 cells: about 5.3 h and 6.4 GB (at 0.19 ms each" in r.output and "--yes" in r.output
+    assert len(r.output.strip().splitlines()) == 1 and time.perf_counter() - t0 < 2.0
+    # the gate itself: --yes lets the same work through; a flexible grid is dearer per cell
+    from jaxrock.cli import _estimate
+
+    _estimate(10**8, "rigid", yes=True)
+    _estimate(800_000, "spring-flexible", yes=True)  # 56 min: announced, allowed
+    with pytest.raises(typer.Exit):
+        _estimate(900_000, "spring-flexible", yes=False)  # 63 min
+    _estimate(900_000, "rigid", yes=False)  # 2.9 min
+
+
+def test_huge_list_option_is_refused():
+    r = invoke("record-spectrum", "--heights", "1:2:100000000")
+    assert r.exit_code == 2 and "n = 100000000 values; valid: at most 100000" in r.output, r.output
+
+
+def test_huge_record_sweep_is_refused_with_an_estimate():
+    r = invoke("record-spectrum", "--heights", "1:20:10000")
+    assert r.exit_code == 2 and "240,000 record runs: about" in r.output and "--yes" in r.output, r.output
+
+
+def test_interrupted_spectrum_keeps_its_batches_and_says_how_to_resume(tmp_path, monkeypatch):
+    """Ctrl-C in the second of three batches: exit 130, the first batch kept in the checkpoint
+    folder (its own file; no temporary left), one line with the command that resumes; the rerun
+    computes the two other batches only and equals the library's spectrum."""
+    from jaxrock import spectra
+
+    out = tmp_path / "spec"
+    args = ["spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6, "--accel-min", 0.8,
+            "--accel-max", 6, "--out", out, "--quiet", "--batch-size", 3, "--refine", 0]
+    real, calls = spectra.run_batch, []
+
+    def interrupted_in_second_batch(*a, **k):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(spectra, "run_batch", interrupted_in_second_batch)
+    r = invoke(*args)
+    assert r.exit_code == 130, r.output
+    assert "interrupted: 3 of 9 cells kept in" in r.output and "resume with: jaxrock" in r.output
+    ck = Path(f"{out}.checkpoint")
+    assert sorted(f.name for f in ck.iterdir()) == ["batch_000000000000.npz", "made_by.json"]
+    monkeypatch.setattr(spectra, "run_batch", real)
+    calls.clear()
+    monkeypatch.setattr(spectra, "run_batch", lambda *a, **k: (calls.append(1), real(*a, **k))[1])
+    r = invoke(*args)
+    assert r.exit_code == 0, r.output
+    assert len(calls) == 2 and not ck.exists()
+    ref = overturning_spectrum(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), np.linspace(1.5, 6, 3),
+                               np.linspace(0.8, 6, 3), progress=False)
+    np.testing.assert_allclose(Spectrum.load(tmp_path / "spec.nc").max_theta, ref.max_theta, rtol=0, atol=1e-12)
+
+
+def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, monkeypatch):
+    """A results file carries how it was made (<results>.made_by.json): resuming after the record
+    file's content changed (same name, same row inputs), or under another package version, is
+    refused with one line naming it; a results file with no description is refused too."""
+    from jaxrock import provenance
+
+    rec = tmp_path / "rec.txt"
+    t = np.arange(100) * 0.02
+    rec.write_text("".join(f"{x:.17g} {0.3 * np.sin(3 * x):.17g}\n" for x in t))
+    scenes = _write(tmp_path / "scenes.csv", "height,tan_alpha,pulse,scale\n10,0.2,rec.txt,1\n5,0.2,rec.txt,2\n")
+    res = tmp_path / "results.csv"
+    r = invoke("batch", scenes, res, "--quiet")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "results.csv.made_by.json").is_file()
+    assert invoke("batch", scenes, res, "--resume", "--quiet").exit_code == 0  # same run: resumes
+    rec.write_text("".join(f"{x:.17g} {0.4 * np.sin(3 * x):.17g}\n" for x in t))
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 2 and "made by a different run (record rec.txt:" in r.output, r.output
+    assert len(r.output.strip().splitlines()) == 1
+    rec.write_text("".join(f"{x:.17g} {0.3 * np.sin(3 * x):.17g}\n" for x in t))
+    version = provenance.package_version()
+    monkeypatch.setattr(provenance, "package_version", lambda: "9.9.9")
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 2 and f"jaxrock: {version} → 9.9.9" in r.output, r.output
+    (tmp_path / "results.csv.made_by.json").unlink()
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 2 and "no readable description results.csv.made_by.json" in r.output, r.output
