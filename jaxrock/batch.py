@@ -70,7 +70,7 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import provenance
+from . import interrupt, provenance
 from ._validate import JaxrockInputError, check_range
 from .excitation import Record
 from .geometry import Block
@@ -425,6 +425,15 @@ def _read_done(results: Path, header: list[str], scenes: list[Scene]) -> dict[in
     return done
 
 
+def count_results(results) -> int:
+    """Finished rows in a results file (0 when it is missing or unreadable)."""
+    try:
+        with _text(Path(results), "results") as fh:
+            return sum(1 for rec in csv.DictReader(fh) if rec.get("status") in STATUS_NAMES)
+    except (OSError, JaxrockInputError):
+        return 0
+
+
 def _chunks(idx: list[int], size: int):
     for lo in range(0, len(idx), size):
         yield idx[lo : lo + size]
@@ -493,6 +502,7 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
         models = [s.model for s in members]
         excs = [s.excitation for s in members]
         for part in _chunks(list(range(len(members))), chunk_size):
+            interrupt.stop_point()
             size = _pad_size(len(part), chunk_size)
             index = part + [part[0]] * (size - len(part))
             sol = run_stacked(_stack([models[i] for i in index]), _stack([excs[i] for i in index]))
@@ -533,4 +543,4 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
     )
 
 
-__all__ = ["read_scenes", "run_scenes", "run_stacked", "Scene", "BatchReport", "MODELS", "INPUT_COLUMNS", "RESULT_COLUMNS"]
+__all__ = ["read_scenes", "run_scenes", "run_stacked", "count_results", "Scene", "BatchReport", "MODELS", "INPUT_COLUMNS", "RESULT_COLUMNS"]

@@ -51,6 +51,7 @@ import optax
 import optimistix as optx
 from jaxtyping import Array, Bool, Float, Int
 
+from . import interrupt
 from ._validate import JaxrockInputError, check_range
 from .excitation import StillGround
 from .geometry import Block
@@ -358,6 +359,7 @@ def calibrate_cbar(
         bar = tqdm(total=max_iter, desc="calibrating c̄", unit="it")
     try:
         for it in range(max_iter + 1):
+            interrupt.stop_point()
             r2, slope = _values_and_slopes(family, ta, log_c, xs, integrator)
             e = r2 - target[:, None]
             ok = jnp.all(jnp.isfinite(e), axis=1) & jnp.all(jnp.isfinite(slope), axis=1)

@@ -37,6 +37,7 @@ RECORD_RUN_SECONDS = 0.37  # one rigid run of El Centro (40 s): default record-s
 CELL_BYTES = 64  # a_p, ω_p, the grid, the results and the checkpoint's copy, per cell
 LIMIT_SECONDS, LIMIT_BYTES = 3600.0, 2e9
 EXIT_UNTRUSTED = 1  # the work ran, but some run ended with a status other than ok
+EXIT_INTERRUPTED = 130  # SIGINT or SIGTERM: stopped at a safe point, finished work kept
 
 # what to change, per failed status (the line printed beside a non-zero exit)
 STATUS_ADVICE = {
@@ -82,20 +83,25 @@ def _estimate(n_cells: int, kind: str, yes: bool, what: str = "cells", per_cell:
         typer.echo(f"{est}, plus compilation", err=True)
 
 
-def _interrupted(ck: Optional[Path], n_cells: int):
-    """Ctrl-C: keep the finished batches, remove half-written files, say how to resume; exit 130."""
+def _resume_command(extra: str | None = None) -> str:
     import shlex
     import sys
 
+    argv = sys.argv[1:]
+    return "jaxrock " + shlex.join(argv + ([extra] if extra and extra not in argv else []))
+
+
+def _interrupted(ck: Optional[Path], n_cells: int):
+    """A stop asked by a signal: remove half-written files, say what is kept and how to resume; exit 130."""
     from .provenance import checkpoint_cells, remove_temporaries
 
     if ck is not None and ck.is_dir():
         remove_temporaries(ck)
         kept = checkpoint_cells(ck)
-        typer.echo(f"interrupted: {kept:,} of {n_cells:,} cells kept in {ck}; resume with: jaxrock {shlex.join(sys.argv[1:])}", err=True)
+        typer.echo(f"interrupted: {kept:,} of {n_cells:,} cells kept in {ck}; resume with: {_resume_command()}", err=True)
     else:
         typer.echo("interrupted: nothing kept (run with --checkpoint to keep finished batches)", err=True)
-    raise typer.Exit(130)
+    raise typer.Exit(EXIT_INTERRUPTED)
 
 
 def _history() -> str:
@@ -125,17 +131,24 @@ def _exit_if_untrusted(counts: dict[str, int], what: str):
         raise typer.Exit(EXIT_UNTRUSTED)
 
 
-def _handles_input_errors(fn):
-    """Turn a `JaxrockInputError` into a one-line message and exit code 2."""
+def _guarded(fn):
+    """A command: a `JaxrockInputError` becomes a one-line message and exit code 2; SIGINT and
+    SIGTERM stop the run at its next safe point (`jaxrock.interrupt`) and exit 130 — a command
+    with work to keep catches `Interrupted` itself and says how to resume."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         from ._validate import JaxrockInputError
+        from .interrupt import deferred_signals
 
         try:
-            return fn(*args, **kwargs)
+            with deferred_signals():
+                return fn(*args, **kwargs)
         except JaxrockInputError as e:
             _fail(str(e))
+        except KeyboardInterrupt:
+            typer.echo("interrupted: nothing kept", err=True)
+            raise typer.Exit(EXIT_INTERRUPTED) from None
 
     return wrapper
 
@@ -265,7 +278,7 @@ def spectrum_summary(spec, seconds: float) -> str:
 
 
 @app.command()
-@_handles_input_errors
+@_guarded
 def spectrum(
     model: ModelKind = typer.Option(ModelKind.rigid, help="rigid (RM), spring (quasi-rigid SM with added masses), spring-flexible (SM, concrete column)"),
     height: float = typer.Option(10.0, help="full height 2h [m]"),
@@ -305,10 +318,12 @@ def spectrum(
     ck = Path(f"{out}.checkpoint") if checkpoint else None
     t0 = time.perf_counter()
     bs = even_batch(wr.size * ar.size, batch_size)
+    from .interrupt import Interrupted
+
     try:
         spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=bs, progress=not quiet,
-                                    checkpoint=ck, refine=refine)
-    except KeyboardInterrupt:
+                                    checkpoint=ck, keep_checkpoint=True, refine=refine)
+    except Interrupted:
         _interrupted(ck, wr.size * ar.size)
     seconds = time.perf_counter() - t0
     spec = eqx.tree_at(lambda s: s.attrs, spec, {**spec.attrs, "model_kind": model.value, "undamped": int(undamped),
@@ -321,6 +336,10 @@ def spectrum(
     title = f"{model.value}{' (undamped)' if undamped else ''}, {pulse.value} pulse, 2h = {height:g} m, tanα = {tan_alpha:g}"
     fig = plot_spectrum(spec, title=title, path=Path(f"{out}.png"))
     plt.close(fig)
+    if ck is not None and ck.exists():  # kept until the result files are written
+        import shutil
+
+        shutil.rmtree(ck)
     typer.echo(spectrum_summary(spec, seconds))
     typer.echo(f"wrote {nc} and {out}.png")
     _exit_if_untrusted(_status_counts(spec.status), "cell(s)")
@@ -405,7 +424,7 @@ def solution_summary(sol, model) -> str:
 
 
 @app.command()
-@_handles_input_errors
+@_guarded
 def simulate(
     height: float = typer.Option(10.0, help="full height 2h [m]"),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
@@ -448,6 +467,9 @@ def simulate(
     typer.echo(f"{model.value} model, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}")
     typer.echo(solution_summary(sol, m))
     typer.echo(f"run time {seconds:.2f} s (with compilation)")
+    from .interrupt import stop_point
+
+    stop_point()
     if plot is not None:
         from ._validate import check_positive
 
@@ -474,7 +496,7 @@ def simulate(
 # batch
 # ----------------------------------------------------------------------------------------------
 @app.command()
-@_handles_input_errors
+@_guarded
 def batch(
     scenes: Path = typer.Argument(..., help="scenes CSV (one scene per row; see `jaxrock.batch`)"),
     results: Path = typer.Argument(..., help="results CSV to write"),
@@ -492,8 +514,16 @@ def batch(
     from ._validate import check_writable
     from .batch import run_scenes
 
+    from .batch import count_results
+    from .interrupt import Interrupted
+
     check_writable("results", results)
-    rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet)
+    try:
+        rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet)
+    except Interrupted:
+        typer.echo(f"interrupted: {count_results(results):,} rows kept in {results}; resume with: {_resume_command('--resume')}",
+                   err=True)
+        raise typer.Exit(EXIT_INTERRUPTED) from None
     typer.echo(
         f"{rep.n_rows} rows: {rep.n_run} run in {rep.n_groups} group(s), {rep.n_skipped} skipped (already done); "
         f"{rep.seconds:.1f} s"
@@ -507,7 +537,7 @@ def batch(
 # record spectrum
 # ----------------------------------------------------------------------------------------------
 @app.command("record-spectrum")
-@_handles_input_errors
+@_guarded
 def record_spectrum(
     record: str = typer.Option("elcentro", help="record file (.AT2 or two-column text), or 'elcentro' (packaged El Centro 1940 NS)"),
     model: ModelKind = typer.Option(ModelKind.rigid, help="rigid, spring, spring-flexible"),
@@ -570,7 +600,7 @@ def record_spectrum(
 # calibrate
 # ----------------------------------------------------------------------------------------------
 @app.command()
-@_handles_input_errors
+@_guarded
 def calibrate(
     out: Path = typer.Option(Path("out/calibration"), help="output folder (calibration.csv and the figures)"),
     tan_alphas: Optional[str] = typer.Option(None, help="slenderness values to calibrate at ('0.1,0.2,0.3' or 'a:b:n'; default 0.05:0.35:13)"),

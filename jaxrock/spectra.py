@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import beam, provenance, rigid, spring
+from . import beam, interrupt, provenance, rigid, spring
 from .generalized_alpha import GeneralizedAlpha
 from ._validate import JaxrockInputError, check_grid
 from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
@@ -261,6 +261,7 @@ def overturning_spectrum(
     batch_size: int = 4096,
     progress: bool = True,
     checkpoint: str | os.PathLike | None = None,
+    keep_checkpoint: bool = False,
     refine: int = 0,
 ) -> Spectrum:
     """max |θ|/α′ of `model` over the grid `accel_ratio` (a_p/(g tanα′)) × `omega_ratio` (ω_p/p′).
@@ -269,7 +270,8 @@ def overturning_spectrum(
     - `batch_size`: cells run together in one vmapped batch (memory bound).
     - `checkpoint`: a folder where each finished batch is added as its own file (nothing is
       rewritten); rerunning the same call after an interruption resumes from it, and it is
-      removed when the spectrum is complete. It records
+      removed when the spectrum (with its refinement) is complete, unless `keep_checkpoint`
+      (the caller removes it once the result is saved: the CLI does). It records
       what made it (`jaxrock.provenance`): one of another run (model, parameters, pulse, grid,
       integrator, version) or an unreadable one is refused with a `JaxrockInputError`.
     - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
@@ -300,6 +302,7 @@ def overturning_spectrum(
     starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
     bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
     for s in starts:
+        interrupt.stop_point()
         sl = slice(s, min(s + batch_size, n))
         exc = jax.vmap(cls)(jnp.asarray(a_p[sl]), jnp.asarray(w_p[sl]))
         sol = run_batch(model, exc, integrator)
@@ -312,8 +315,6 @@ def overturning_spectrum(
             provenance.append_checkpoint(ck, made_by, sl, {k: out[k][sl] for k in fields})
         bar.update(sl.stop - sl.start)
     bar.close()
-    if ck is not None and ck.exists():
-        shutil.rmtree(ck)
     shape = (ar.size, wr.size)
     attrs = {
         "model": type(model).__name__,
@@ -338,6 +339,8 @@ def overturning_spectrum(
     )
     if int(refine) > 0:
         spec = refine_boundaries(model, spec, pulse=pulse, iterations=int(refine), integrator=integrator)
+    if ck is not None and ck.exists() and not keep_checkpoint:
+        shutil.rmtree(ck)
     return spec
 
 
@@ -371,6 +374,7 @@ def refine_boundaries(
         hi = line.copy()
         if todo.any():
             for _ in range(int(iterations)):
+                interrupt.stop_point()
                 mid = np.where(todo, 0.5 * (lo + hi), ar[0])
                 exc = jax.vmap(cls)(jnp.asarray(mid * G * tan_a), jnp.asarray(wr * p))
                 yes = np.asarray(getattr(run_batch(model, exc, integrator), flag))
@@ -437,6 +441,7 @@ def record_overturning_scale(
     least = np.full(hs.size, np.inf)
     low = np.full(hs.size, np.nan)
     for i, h in enumerate(tqdm(hs, desc="record spectrum", unit="height", disable=not progress)):
+        interrupt.stop_point()
         new_block = type(block).from_slenderness(h, tan_a, tan_b, exact_inertia=block.exact_inertia)
         m = eqx.tree_at(lambda x: x.block, model, new_block)
         recs = jax.vmap(record.scaled)(jnp.asarray(sc))
@@ -446,6 +451,7 @@ def record_overturning_scale(
         k = int(np.argmax(over))
         lo, hi = (0.0 if k == 0 else sc[k - 1]), sc[k]
         for _ in range(refine):
+            interrupt.stop_point()
             mid = 0.5 * (lo + hi)
             sol = run_batch(m, jax.vmap(record.scaled)(jnp.asarray([mid])), integrator)
             if bool(np.asarray(sol.overturned)[0]):

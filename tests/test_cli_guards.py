@@ -187,40 +187,6 @@ def test_huge_record_sweep_is_refused_with_an_estimate():
     assert r.exit_code == 2 and "240,000 record runs: about" in r.output and "--yes" in r.output, r.output
 
 
-def test_interrupted_spectrum_keeps_its_batches_and_says_how_to_resume(tmp_path, monkeypatch):
-    """Ctrl-C in the second of three batches: exit 130, the first batch kept in the checkpoint
-    folder (its own file; no temporary left), one line with the command that resumes; the rerun
-    computes the two other batches only and equals the library's spectrum."""
-    from jaxrock import spectra
-
-    out = tmp_path / "spec"
-    args = ["spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6, "--accel-min", 0.8,
-            "--accel-max", 6, "--out", out, "--quiet", "--batch-size", 3, "--refine", 0]
-    real, calls = spectra.run_batch, []
-
-    def interrupted_in_second_batch(*a, **k):
-        calls.append(1)
-        if len(calls) == 2:
-            raise KeyboardInterrupt
-        return real(*a, **k)
-
-    monkeypatch.setattr(spectra, "run_batch", interrupted_in_second_batch)
-    r = invoke(*args)
-    assert r.exit_code == 130, r.output
-    assert "interrupted: 3 of 9 cells kept in" in r.output and "resume with: jaxrock" in r.output
-    ck = Path(f"{out}.checkpoint")
-    assert sorted(f.name for f in ck.iterdir()) == ["batch_000000000000.npz", "made_by.json"]
-    monkeypatch.setattr(spectra, "run_batch", real)
-    calls.clear()
-    monkeypatch.setattr(spectra, "run_batch", lambda *a, **k: (calls.append(1), real(*a, **k))[1])
-    r = invoke(*args)
-    assert r.exit_code == 0, r.output
-    assert len(calls) == 2 and not ck.exists()
-    ref = overturning_spectrum(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), np.linspace(1.5, 6, 3),
-                               np.linspace(0.8, 6, 3), progress=False)
-    np.testing.assert_allclose(Spectrum.load(tmp_path / "spec.nc").max_theta, ref.max_theta, rtol=0, atol=1e-12)
-
-
 def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, monkeypatch):
     """A results file carries how it was made (<results>.made_by.json): resuming after the record
     file's content changed (same name, same row inputs), or under another package version, is
