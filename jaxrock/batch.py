@@ -71,6 +71,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from . import interrupt, provenance
+from ._files import exclusive, output_stem, same_file, write_atomically
 from ._validate import JaxrockInputError, check_range
 from .excitation import Record
 from .geometry import Block
@@ -471,10 +472,25 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
         raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
     chunk_size = int(chunk_size)
     t0 = time.perf_counter()
+    results = results_path_for(scenes_path, results_path)
+    if same_file(results, scenes_path):
+        raise JaxrockInputError(f"{results}: the results file is the scenes file (the same file by another name); name another")
     scenes, header = read_scenes(scenes_path)
-    results = Path(results_path)
-    if results.resolve() == Path(scenes_path).resolve():
-        raise JaxrockInputError(f"{results}: the results file must not be the scenes file")
+    clash = [h for h in header if h.lower() in ("row", *RESULT_COLUMNS)]
+    if clash:
+        raise JaxrockInputError(f"{scenes_path}: line 1: column(s) {clash} are names of result columns; rename them")
+    with exclusive(results, "results file"):
+        return _run(scenes, header, results, resume, chunk_size, progress, t0)
+
+
+def results_path_for(scenes_path, results_path) -> Path:
+    """The results file: `results_path`, or inside it when it is a folder (or ends with a
+    separator) as `<scenes stem>_results.csv`."""
+    return output_stem(results_path, f"{Path(scenes_path).stem}_results.csv")
+
+
+def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> BatchReport:
+    """`run_scenes` on checked scenes, the results file held."""
     made_by = _description(scenes)
     sidecar = results.with_name(results.name + ".made_by.json")
     done = _read_done(results, header, scenes) if resume else {}
@@ -482,9 +498,6 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
         fresh = "run without --resume to start afresh, or write another results file"
         provenance.check_description(sidecar, made_by, f"{results}", fresh)
     fields = ["row", *header, *RESULT_COLUMNS]
-    clash = [h for h in header if h.lower() in ("row", *RESULT_COLUMNS)]
-    if clash:
-        raise JaxrockInputError(f"{scenes_path}: line 1: column(s) {clash} are names of result columns; rename them")
 
     todo = [s for s in scenes if s.row not in done]
     groups: dict = {}
@@ -521,13 +534,15 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
 
     # all done: rewrite in row order (atomically)
     allrows = {**done, **new}
-    tmp = results.with_name(results.name + ".tmp")
-    with open(tmp, "w", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=fields)
-        w.writeheader()
-        for r in sorted(allrows):
-            w.writerow({k: allrows[r][k] for k in fields})
-    os.replace(tmp, results)
+
+    def write(tmp):
+        with open(tmp, "w", newline="", encoding="utf-8") as fh:
+            w = csv.DictWriter(fh, fieldnames=fields)
+            w.writeheader()
+            for r in sorted(allrows):
+                w.writerow({k: allrows[r][k] for k in fields})
+
+    write_atomically(results, write)
 
     statuses = [allrows[r]["status"] for r in allrows]
     counts = {name: statuses.count(name) for name in STATUS_NAMES if statuses.count(name)}

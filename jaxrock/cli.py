@@ -7,6 +7,7 @@ parameter and its valid range) and exit code 2, never a traceback.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import time
@@ -131,6 +132,16 @@ def _exit_if_untrusted(counts: dict[str, int], what: str):
         raise typer.Exit(EXIT_UNTRUSTED)
 
 
+_held: contextlib.ExitStack | None = None  # the locks of the running command (`_hold`)
+
+
+def _hold(path, what: str) -> None:
+    """Hold `<path>.lock` until the command ends: a second run writing the same output is refused."""
+    from ._files import exclusive
+
+    _held.enter_context(exclusive(path, what))
+
+
 def _guarded(fn):
     """A command: a `JaxrockInputError` becomes a one-line message and exit code 2; SIGINT and
     SIGTERM stop the run at its next safe point (`jaxrock.interrupt`) and exit 130 — a command
@@ -138,11 +149,12 @@ def _guarded(fn):
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
+        global _held
         from ._validate import JaxrockInputError
         from .interrupt import deferred_signals
 
         try:
-            with deferred_signals():
+            with deferred_signals(), contextlib.ExitStack() as _held:
                 return fn(*args, **kwargs)
         except JaxrockInputError as e:
             _fail(str(e))
@@ -291,7 +303,8 @@ def spectrum(
     accel_min: float = typer.Option(0.5, help="smallest a_p/(g tanα)"),
     accel_max: float = typer.Option(10.0, help="largest a_p/(g tanα)"),
     n_accel: int = typer.Option(48, help="number of a_p/(g tanα) values"),
-    out: Path = typer.Option(Path("out/spectrum"), help="output stem: writes <out>.nc (netCDF) and <out>.png"),
+    out: str = typer.Option("out/spectrum", help="output stem: writes <out>.nc (netCDF) and <out>.png; a folder (or a path "
+                            "ending in /) means <out>/spectrum.nc and .png"),
     undamped: bool = typer.Option(False, "--undamped", help="no energy loss: η = 1 (rigid) or c̄ = 0 (spring)"),
     checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in the folder <out>.checkpoint; a rerun resumes"),
     batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into equal batches"),
@@ -303,6 +316,7 @@ def spectrum(
     yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),
 ):
     """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
+    from ._files import output_stem
     from ._validate import check_writable
     from .spectra import overturning_spectrum
 
@@ -311,8 +325,10 @@ def spectrum(
     _check_count("--batch-size", batch_size)
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped)
     integ = _integrator(model, tol)
+    out = output_stem(out, "spectrum")
     for suffix in (".nc", ".png"):
         check_writable("--out", Path(f"{out}{suffix}"))
+    _hold(out, "--out")
     kind = "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value
     _estimate(wr.size * ar.size, kind, yes)
     ck = Path(f"{out}.checkpoint") if checkpoint else None
@@ -499,7 +515,7 @@ def simulate(
 @_guarded
 def batch(
     scenes: Path = typer.Argument(..., help="scenes CSV (one scene per row; see `jaxrock.batch`)"),
-    results: Path = typer.Argument(..., help="results CSV to write"),
+    results: str = typer.Argument(..., help="results CSV to write (a folder, or a path ending in /: <folder>/<scenes stem>_results.csv)"),
     resume: bool = typer.Option(False, "--resume", help="skip rows already in the results file"),
     chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
@@ -514,9 +530,10 @@ def batch(
     from ._validate import check_writable
     from .batch import run_scenes
 
-    from .batch import count_results
+    from .batch import count_results, results_path_for
     from .interrupt import Interrupted
 
+    results = results_path_for(scenes, results)
     check_writable("results", results)
     try:
         rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet)
@@ -553,11 +570,13 @@ def record_spectrum(
     units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
                                  "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
     refine: int = typer.Option(8, help="bisections refining the least overturning factor (resolution: sweep step / 2^refine)"),
-    out: Path = typer.Option(Path("out/record_spectrum"), help="output stem: <out>.nc, <out>.csv, <out>.png"),
+    out: str = typer.Option("out/record_spectrum", help="output stem: <out>.nc, <out>.csv, <out>.png; a folder (or a path "
+                            "ending in /) means <out>/record_spectrum.*"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h"),
 ):
     """Least scale factor of a record that overturns the body, per height (paper figure 10)."""
+    from ._files import output_stem, write_atomically
     from ._validate import JaxrockInputError, check_writable
     from .plotting import plot_record_spectrum
     from .spectra import record_overturning_scale
@@ -568,8 +587,10 @@ def record_spectrum(
         raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
     m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
     exc, desc = _excitation(m.block, "symmetric", record, 1.0, None, None, None, None, units)
+    out = output_stem(out, "record_spectrum")
     for suffix in (".nc", ".csv", ".png"):
         check_writable("--out", Path(f"{out}{suffix}"))
+    _hold(out, "--out")
     per_run = RECORD_RUN_SECONDS * CELL_SECONDS[model.value] / CELL_SECONDS["rigid"] * float(exc.t_end - exc.t_start) / 40.0
     _estimate(hs.size * (sc.size + refine), model.value, yes, what="record runs", per_cell=per_run)
     t0 = time.perf_counter()
@@ -577,13 +598,10 @@ def record_spectrum(
     seconds = time.perf_counter() - t0
     rs = type(rs)(height=rs.height, scale=rs.scale, bracket_low=rs.bracket_low,
                   attrs={**rs.attrs, "model_kind": model.value, "history": _history()})
-    out.parent.mkdir(parents=True, exist_ok=True)
     nc = rs.save(Path(f"{out}.nc"))
     csv_path = Path(f"{out}.csv")
-    with open(csv_path, "w") as fh:
-        fh.write("height,least_scale,bracket_low\n")
-        for h, s, lo in zip(rs.height, rs.scale, rs.bracket_low):
-            fh.write(f"{float(h)!r},{float(s)!r},{float(lo)!r}\n")
+    lines = ["height,least_scale,bracket_low"] + [f"{float(h)!r},{float(s)!r},{float(lo)!r}" for h, s, lo in zip(rs.height, rs.scale, rs.bracket_low)]
+    write_atomically(csv_path, lambda tmp: tmp.write_text("\n".join(lines) + "\n"))
     import matplotlib.pyplot as plt
 
     fig = plot_record_spectrum([rs], [f"{model.value}, tanα = {tan_alpha:g}"], path=Path(f"{out}.png"),

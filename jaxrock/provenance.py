@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from importlib import metadata
 from pathlib import Path
 
 import jax
 import numpy as np
 
+from ._files import write_atomically
 from ._validate import JaxrockInputError
 
 
@@ -104,10 +104,7 @@ def to_json(d: dict[str, str]) -> str:
 
 def write_description(file: Path, d: dict[str, str]) -> None:
     """Write a description (JSON) under a temporary name and rename it: never half-written."""
-    file = Path(file)
-    tmp = file.with_name(f"tmp_{file.name}")
-    tmp.write_text(to_json(d), encoding="utf-8")
-    os.replace(tmp, file)
+    write_atomically(file, lambda tmp: tmp.write_text(to_json(d), encoding="utf-8"))
 
 
 def check_description(file: Path, wanted: dict[str, str], what: str, fresh: str) -> None:
@@ -154,9 +151,7 @@ def append_checkpoint(path: Path, made_by: dict[str, str], cells: slice, arrays:
     path.mkdir(parents=True, exist_ok=True)
     if not (path / "made_by.json").exists():
         write_description(path / "made_by.json", made_by)
-    name = f"batch_{cells.start:012d}.npz"
-    np.savez(path / f"tmp_{name}", start=cells.start, stop=cells.stop, **arrays)
-    os.replace(path / f"tmp_{name}", path / name)
+    write_atomically(path / f"batch_{cells.start:012d}.npz", lambda tmp: np.savez(tmp, start=cells.start, stop=cells.stop, **arrays))
 
 
 def checkpoint_cells(path: Path) -> int:

@@ -10,6 +10,7 @@ uplift line, rocking near the overturning line) do not make the whole batch wait
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 from pathlib import Path
@@ -22,6 +23,7 @@ from tqdm.auto import tqdm
 
 from . import beam, interrupt, provenance, rigid, spring
 from .generalized_alpha import GeneralizedAlpha
+from ._files import exclusive, write_atomically
 from ._validate import JaxrockInputError, check_grid
 from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
 from .geometry import G
@@ -112,8 +114,8 @@ class Spectrum(eqx.Module):
         """Write a netCDF file (readable by xarray, netCDF tools and `Spectrum.load`)."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        self.to_xarray().to_netcdf(path, engine="scipy")
-        return path
+        ds = self.to_xarray()
+        return write_atomically(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))
 
     @classmethod
     def load(cls, path) -> "Spectrum":
@@ -273,7 +275,8 @@ def overturning_spectrum(
       removed when the spectrum (with its refinement) is complete, unless `keep_checkpoint`
       (the caller removes it once the result is saved: the CLI does). It records
       what made it (`jaxrock.provenance`): one of another run (model, parameters, pulse, grid,
-      integrator, version) or an unreadable one is refused with a `JaxrockInputError`.
+      integrator, version) or an unreadable one is refused with a `JaxrockInputError`, and so
+      is one that another run is writing (`<checkpoint>.lock`).
     - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
     """
     wr = check_grid("omega_ratio (omega_p/p)", omega_ratio)
@@ -281,6 +284,15 @@ def overturning_spectrum(
     if int(batch_size) < 1:
         raise JaxrockInputError(f"batch_size = {batch_size}; valid: an integer >= 1")
     cls = _pulse_class(pulse)
+    ck = Path(checkpoint) if checkpoint is not None else None
+    with contextlib.ExitStack() as stack:
+        if ck is not None:
+            stack.enter_context(exclusive(ck, "checkpoint"))
+        return _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_checkpoint, refine, pulse)
+
+
+def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_checkpoint, refine, pulse) -> Spectrum:
+    """`overturning_spectrum` on checked arguments, its checkpoint (if any) held."""
     block = model.block
     p, tan_a = float(block.p_r), float(jnp.tan(block.alpha_r))
     W, A = np.meshgrid(wr, ar)
@@ -290,7 +302,6 @@ def overturning_spectrum(
     fields = ("max_theta", "overturned", "uplifted", "status")
     out = {k: np.zeros(n, dtype=float if k == "max_theta" else (np.int32 if k == "status" else bool)) for k in fields}
     done = np.zeros(n, dtype=bool)
-    ck = Path(checkpoint) if checkpoint is not None else None
     made_by = provenance.describe(model=model, excitation=cls.__name__, integrator=integrator,
                                   grid={"omega_ratio": wr, "accel_ratio": ar})
     if ck is not None and ck.exists():
@@ -403,15 +414,15 @@ class RecordSpectrum(eqx.Module):
 
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        xr.Dataset(
+        ds = xr.Dataset(
             {
                 "scale": (("height",), self.scale, {"long_name": "least overturning scale factor", "units": "1"}),
                 "bracket_low": (("height",), self.bracket_low, {"long_name": "largest scale below it that does not overturn", "units": "1"}),
             },
             coords={"height": ("height", self.height, {"long_name": "2h", "units": "m"})},
             attrs={k: str(v) for k, v in self.attrs.items()},
-        ).to_netcdf(path, engine="scipy")
-        return path
+        )
+        return write_atomically(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))
 
 
 def record_overturning_scale(

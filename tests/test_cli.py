@@ -31,13 +31,13 @@ def invoke(*args):
 
 # -- spectrum --------------------------------------------------------------------------------------
 def test_spectrum_writes_nc_equal_to_library_and_png(tmp_path):
-    out = tmp_path / "spec"
+    """`--out sp/` (a trailing separator) writes inside the folder sp (it wrote sp.nc beside it)."""
     r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
-               "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet")
+               "--accel-min", 0.8, "--accel-max", 6, "--out", f"{tmp_path}/sp/", "--quiet")
     assert r.exit_code == 0, r.output
-    assert (tmp_path / "spec.png").stat().st_size > 1000
-    assert not (tmp_path / "spec.checkpoint").exists()  # removed once complete
-    spec = Spectrum.load(tmp_path / "spec.nc")
+    assert (tmp_path / "sp" / "spectrum.png").stat().st_size > 1000
+    assert sorted(f.name for f in (tmp_path / "sp").iterdir()) == ["spectrum.nc", "spectrum.png"]  # no checkpoint, lock or temporary left
+    spec = Spectrum.load(tmp_path / "sp" / "spectrum.nc")
     model = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
     ref = overturning_spectrum(model, np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3), batch_size=9, progress=False)
     np.testing.assert_array_equal(spec.omega_ratio, ref.omega_ratio)
@@ -195,9 +195,10 @@ def _direct(row):
 
 def test_batch_round_trip_and_resume(tmp_path):
     scenes = _write(tmp_path / "scenes.csv", SCENES)
-    res = tmp_path / "out" / "results.csv"
-    r = invoke("batch", scenes, res, "--quiet")
+    (tmp_path / "out").mkdir()
+    r = invoke("batch", scenes, tmp_path / "out", "--quiet")  # a folder: the results go inside it
     assert r.exit_code == 0, r.output
+    res = tmp_path / "out" / "scenes_results.csv"
     rows = _read(res)
     assert [x["row"] for x in rows] == ["1", "2", "3"]
     assert [x["id"] for x in rows] == ["a", "b", "c"]
@@ -275,15 +276,15 @@ def test_record_spectrum_equals_library(tmp_path):
     acc = 0.4 * np.sin(2 * np.pi * 1.0 * t) * np.exp(-t)  # [g]
     rec_file = tmp_path / "pulse.txt"
     rec_file.write_text("\n".join(f"{a:.4f} {b:.8f}" for a, b in zip(t, acc)) + "\n")
-    out = tmp_path / "rs"
+    (tmp_path / "rs").mkdir()  # an existing folder: the files go inside it
     r = invoke("record-spectrum", "--record", rec_file, "--heights", "1,4", "--scales", "0.5:8:4", "--refine", 3,
-               "--tan-alpha", 0.2, "--out", out, "--quiet")
+               "--tan-alpha", 0.2, "--out", tmp_path / "rs", "--quiet")
     assert r.exit_code == 0, r.output
-    rows = _read(tmp_path / "rs.csv")
+    rows = _read(tmp_path / "rs" / "record_spectrum.csv")
     ref = record_overturning_scale(jr.RigidModel(jr.Block.from_slenderness(1.0, 0.2)), jr.read_record(rec_file),
                                    [1.0, 4.0], np.linspace(0.5, 8, 4), refine=3, progress=False)
     np.testing.assert_allclose([float(x["least_scale"]) for x in rows], ref.scale)
-    assert (tmp_path / "rs.png").exists() and (tmp_path / "rs.nc").exists()
+    assert sorted(f.name for f in (tmp_path / "rs").iterdir()) == [f"record_spectrum.{x}" for x in ("csv", "nc", "png")]
 
 
 def test_calibrate_bad_input_exits_2(tmp_path):

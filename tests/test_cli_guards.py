@@ -5,7 +5,11 @@ run on separate workers."""
 
 from __future__ import annotations
 
+import os
 import re
+import socket
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -14,6 +18,7 @@ import pytest
 import typer
 
 import jaxrock as jr
+from jaxrock import JaxrockInputError
 from jaxrock.spectra import Spectrum, overturning_spectrum
 from test_cli import _write, invoke
 
@@ -214,3 +219,43 @@ def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, mon
     (tmp_path / "results.csv.made_by.json").unlink()
     r = invoke("batch", scenes, res, "--resume", "--quiet")
     assert r.exit_code == 2 and "no readable description results.csv.made_by.json" in r.output, r.output
+
+
+# -- files the user names -----------------------------------------------------------------------
+def test_results_file_that_is_a_hard_link_to_the_scenes_is_refused(tmp_path):
+    """A hard link is the same file under another name: it was overwritten (symbolic links were caught)."""
+    scenes = _write(tmp_path / "scenes.csv", "height,tan_alpha,accel_ratio,omega_ratio\n5,0.2,2,3\n")
+    os.link(scenes, tmp_path / "results.csv")
+    before = scenes.read_bytes()
+    r = invoke("batch", scenes, tmp_path / "results.csv")
+    assert r.exit_code == 2 and "the results file is the scenes file" in r.output and len(r.output.splitlines()) == 1, r.output
+    assert scenes.read_bytes() == before
+
+
+@pytest.mark.parametrize("cmd", [["spectrum"], ["record-spectrum"]])
+def test_output_another_live_run_is_writing_is_refused_before_the_work(tmp_path, cmd):
+    """Two runs into one --out shared temporaries and one died with a FileNotFoundError
+    traceback; the second is now refused in one line naming the other process."""
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        (tmp_path / "sp.lock").write_text(f"{socket.gethostname()} {other.pid}")
+        r = invoke(*cmd, "--out", tmp_path / "sp")
+        assert r.exit_code == 2 and f"another run (process {other.pid}" in r.output, r.output
+    finally:
+        other.kill()
+        other.wait()
+
+
+def test_lock_of_a_dead_run_is_taken_over_and_released(tmp_path):
+    from jaxrock._files import exclusive
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    lock = tmp_path / "sp.lock"
+    lock.write_text(f"{socket.gethostname()} {gone.pid}")
+    with exclusive(tmp_path / "sp", "--out"):
+        assert lock.read_text() == f"{socket.gethostname()} {os.getpid()}"
+        with pytest.raises(JaxrockInputError, match=f"another run \\(process {os.getpid()}"):
+            with exclusive(tmp_path / "sp", "--out"):
+                pass
+    assert not lock.exists()
