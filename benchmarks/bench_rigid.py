@@ -52,39 +52,12 @@ def block_until_ready(tree):
     return jax.tree_util.tree_map(lambda x: x.block_until_ready() if hasattr(x, "block_until_ready") else x, tree)
 
 
-_F32 = """
-import json, sys, time, numpy as np, jaxrock as jr
-wr, ar = np.array(json.loads(sys.argv[1])), np.array(json.loads(sys.argv[2]))
-m = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
-integ = jr.EventIntegrator(rtol=1e-6, atol=1e-8, root_tol=1e-6)
-jr.overturning_spectrum(m, wr, ar, integrator=integ, progress=False)
-t = time.perf_counter()
-s = jr.overturning_spectrum(m, wr, ar, integrator=integ, progress=False)
-dt = time.perf_counter() - t
-np.savez(sys.argv[3], max_theta=s.max_theta, overturned=s.overturned, status=s.status, seconds=dt)
-"""
-
-
-def _float32_spectrum(wr, ar) -> dict:
-    """The same spectrum in float32, in a fresh process (x64 is chosen at import)."""
-    import json
-    import subprocess
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as d:
-        path = Path(d) / "f32.npz"
-        env = dict(os.environ, JAXROCK_X64="0")
-        subprocess.run([sys.executable, "-c", _F32, json.dumps(list(wr)), json.dumps(list(ar)), str(path)], check=True, env=env)
-        return dict(np.load(path))
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", type=int, default=64, help="cells of the SciPy subsample (default 64)")
     ap.add_argument("--grid", type=int, default=64, help="grid size per axis (default 64)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--skip-wp", action="store_true", help="skip the work-precision table")
-    ap.add_argument("--skip-f32", action="store_true", help="skip the float32 run")
     args = ap.parse_args()
 
     blk = jr.Block.from_slenderness(10.0, 0.2)
@@ -222,15 +195,6 @@ def main() -> None:
         if best is not None:
             out(f"fastest jaxrock setting with max err <= 1e-6: {best[1]} ({best[0] / ncell * 1e3:.3f} ms/scene, err {best[2]:.1e});"
                 f" SciPy tuned / it = {tuned[1] / (best[0] / ncell):.1f}x")
-
-    # --- float32 ----------------------------------------------------------------------------------
-    if not args.skip_f32:
-        out("")
-        f32 = _float32_spectrum(wr, ar)
-        bad = f32["status"] != 0
-        err = np.max(np.abs(f32["max_theta"].ravel() - ref_theta)[~bad.ravel()]) if (~bad).any() else np.nan
-        out(f"float32 (JAXROCK_X64=0, Tsit5 rtol 1e-6, atol 1e-8, root_tol 1e-6): {f32['seconds'] / ncell * 1e3:.3f} ms/scene,"
-            f" max err θ/α {err:.2e}, failed {int(bad.sum())}, overturn flags differing {int(np.sum(f32['overturned'].ravel() != (ref_theta >= 1.0)))}")
 
     res = HERE / "results"
     res.mkdir(exist_ok=True)

@@ -8,8 +8,10 @@ when the batch was built outside the transformation, e.g. by `overturning_spectr
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 
@@ -21,8 +23,16 @@ def is_concrete(x) -> bool:
     return not any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
 
 
-def _values(x):
-    return np.asarray(x, dtype=float).ravel()
+def _values(name: str, x) -> np.ndarray:
+    """The real values of `x`, or a one-line refusal of what is not a number."""
+    if x is None:
+        raise JaxrockInputError(f"{name} is missing (None); give a number")
+    a = np.asarray(x)
+    if a.dtype.kind == "c":
+        raise JaxrockInputError(f"{name} = {complex(a.ravel()[0])} is complex; give a real number")
+    if a.dtype.kind not in "biuf":
+        raise JaxrockInputError(f"{name} = {x!r} is not a number")
+    return a.astype(float).ravel()
 
 
 def check_range(
@@ -37,7 +47,7 @@ def check_range(
     """Raise `JaxrockInputError` unless every value of `x` is finite and in the interval."""
     if not is_concrete(x):
         return
-    v = _values(x)
+    v = _values(name, x)
     lb = "(" if lo_open else "["
     rb = ")" if hi_open else "]"
     rng = f"{lb}{lo:g}, {hi:g}{rb}"
@@ -51,6 +61,46 @@ def check_range(
     if bad.any():
         first = v[bad][0]
         raise JaxrockInputError(f"{name} = {first:g} is outside the valid range {rng}")
+
+
+class Limit(NamedTuple):
+    """The valid range of one parameter, declared once: checked with a one-line error on concrete
+    values (`check_limits`, at construction) and as a traced flag under `jax.vmap`/`jax.jit`
+    (`within_limits`, which `simulate` turns into `Status.invalid_input`)."""
+
+    name: str
+    value: object
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+    ndim: int = 0  # dimensions of the value for one scene (1: a record's samples)
+
+
+def check_limits(limits) -> None:
+    for lim in limits:
+        check_range(lim.name, lim.value, lim.lo, lim.hi, lo_open=lim.lo_open, hi_open=lim.hi_open)
+
+
+def check_one_scene(limits) -> None:
+    """Refuse, in one line, parameters that hold many values where a run takes one scene (shapes
+    are known even under `jax.jit`; under `jax.vmap` each lane sees one value)."""
+    for lim in limits:
+        if np.ndim(lim.value) != lim.ndim:
+            raise JaxrockInputError(f"{lim.name} has shape {np.shape(lim.value)}; simulate runs one scene: vmap it "
+                                    "(jax.vmap(simulate)) or use overturning_spectrum / run_batch for many")
+
+
+def within_limits(limits):
+    """Whether every value is finite and within its limit: a JAX boolean (traceable)."""
+    ok = jnp.asarray(True)
+    for lim in limits:
+        v = jnp.asarray(lim.value)
+        inside = jnp.isfinite(v)
+        inside &= (v > lim.lo) if lim.lo_open else (v >= lim.lo)
+        inside &= (v < lim.hi) if lim.hi_open else (v <= lim.hi)
+        ok &= jnp.all(inside)
+    return ok
 
 
 def check_positive(name: str, x) -> None:

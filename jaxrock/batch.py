@@ -27,7 +27,9 @@ first scene after the header). Columns:
 | `rho` | kg/m³ | density of the column | > 0, default 2500 (`spring-flexible` only) |
 | `zeta` | – | column damping ratio, first fixed-base mode | ≥ 0, default 0.01 (`spring-flexible` only) |
 
-Any other column (e.g. an `id` or a note) is copied to the results unchanged. A parameter given
+Label columns are copied to the results unchanged: `id`, `name`, `label`, `group`, `note`,
+`notes`, `comment`, or any name starting with `x_`. Any other column is an error that names the
+closest valid one (a misspelt `modle` would otherwise run the default model). A parameter given
 for a model or pulse it does not apply to (e.g. `eta` for a spring model, `scale` for a pulse) is
 an error. Every row is checked before anything runs; the first bad row stops the run with a
 message naming the file, the row (and its line), the column and the valid range.
@@ -57,6 +59,7 @@ the batch a row lands in can change the last digits.
 from __future__ import annotations
 
 import csv
+import difflib
 import io
 import math
 import os
@@ -99,6 +102,10 @@ INPUT_COLUMNS = (
     "rho",
     "zeta",
 )
+# Columns copied to the results unchanged (labels); any other unknown column is an error naming
+# the closest known one (a typo such as `modle` ran the rigid model in silence).
+PASS_THROUGH = ("id", "name", "label", "group", "note", "notes", "comment")
+PASS_THROUGH_PREFIX = "x_"
 RESULT_COLUMNS = ("max_theta", "overturned", "t_overturn", "uplifted", "t_uplift", "n_impacts", "status")
 _ONLY = {
     "eta": ("rigid",),
@@ -274,7 +281,7 @@ def _check_row(row: _Row, base: Path, cache: dict) -> tuple[object, object, str]
 def _text(path: Path, what: str) -> io.StringIO:
     """A CSV file's text, for `csv` (newline=""): a file that is not UTF-8 text is refused in one line."""
     try:
-        text = Path(path).read_bytes().decode("utf-8")
+        text = Path(path).read_bytes().decode("utf-8-sig")  # a spreadsheet's byte-order mark is not part of the header
     except UnicodeDecodeError as e:
         raise JaxrockInputError(f"{path}: the {what} file is not UTF-8 text (byte {e.start}: {e.reason}); expected a CSV") from None
     if "\x00" in text:
@@ -302,6 +309,13 @@ def read_scenes(path) -> tuple[list[Scene], list[str]]:
         dup = sorted({k for k in keys if keys.count(k) > 1 and k})
         if dup:
             raise JaxrockInputError(f"{path}: line 1: column(s) {dup} appear more than once")
+        for h, k in zip(header, keys):
+            if k not in INPUT_COLUMNS and k not in PASS_THROUGH and not k.startswith(PASS_THROUGH_PREFIX):
+                close = difflib.get_close_matches(k, INPUT_COLUMNS + PASS_THROUGH, n=1, cutoff=0.6)
+                hint = f"did you mean '{close[0]}'? " if close else ""
+                raise JaxrockInputError(
+                    f"{path}: line 1: unknown column {h!r}; {hint}valid: {', '.join(INPUT_COLUMNS)}; "
+                    f"copied through: {', '.join(PASS_THROUGH)} or any name starting with '{PASS_THROUGH_PREFIX}'")
         if "height" not in keys:
             raise JaxrockInputError(
                 f"{path}: line 1: no 'height' column; the header must name the scene columns "

@@ -18,8 +18,38 @@ from typing import Optional
 import equinox as eqx
 import numpy as np
 import typer
+import typer.core
+
+class _OneLineErrors(typer.core.TyperGroup):
+    """Click's usage errors (an unknown choice, a non-integer count, an unknown option) as one line,
+    `Error: … (see 'jaxrock CMD --help')`, exit code 2, like every other bad input; click printed
+    four lines (usage, a hint, a blank line, the error)."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        import sys
+
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except typer.Abort:
+            typer.echo("interrupted: nothing kept", err=True)
+            rv = EXIT_INTERRUPTED
+        except typer.TyperException as e:  # click's usage errors and the like
+            if not standalone_mode:
+                raise
+            ctx = getattr(e, "ctx", None)
+            if type(e).__name__ == "NoArgsIsHelpError":  # `jaxrock` alone: the help, as asked
+                typer.echo(e.format_message(), err=True)
+            else:
+                hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+                typer.echo(f"Error: {e.format_message()}{hint}", err=True)
+            rv = e.exit_code
+        if not standalone_mode:
+            return rv
+        sys.exit(rv if isinstance(rv, int) else 0)
+
 
 app = typer.Typer(
+    cls=_OneLineErrors,
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
@@ -47,6 +77,7 @@ STATUS_ADVICE = {
     "(loosen --tol, or raise max_steps of the integrator in Python)",
     "solver_failed": "the integrator failed (step underflow, divergence or NaN): loosen --tol or report the scene",
     "missed_impact": "an impact was crossed without its event: report the command line as a bug",
+    "invalid_input": "a parameter was outside its valid range: report the command line as a bug (the CLI checks its input)",
 }
 
 
@@ -187,13 +218,18 @@ def parse_values(name: str, text: str) -> np.ndarray:
     """A list option: "1,2,5" (values) or "a:b:n" (n values evenly spaced from a to b)."""
     from ._validate import JaxrockInputError
 
+    import re
+
     text = text.strip()
+    items = re.split(r"\s*,\s*|\s+", text)
+    if text and "" in items:
+        raise JaxrockInputError(f"{name} = {text!r} has an empty item; expected numbers '1,2,5' or a range 'a:b:n'")
     try:
         if ":" in text:
             a, b, n = text.split(":")
             a, b, n = float(a), float(b), int(n)
         else:
-            vals = [float(v) for v in text.replace(" ", ",").split(",") if v]
+            vals = [float(v) for v in items if v]
     except ValueError:
         raise JaxrockInputError(f"{name} = {text!r}; expected numbers '1,2,5' or a range 'a:b:n'") from None
     if ":" in text:
@@ -464,7 +500,7 @@ def simulate(
     tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
     plot: Optional[Path] = typer.Option(None, help="write a time-history plot (PNG) here"),
     t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
-    n_points: int = typer.Option(1500, help="plot: number of saved time points"),
+    n_points: Optional[int] = typer.Option(None, help="plot: number of saved time points (default 1500)"),
 ):
     """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
     from .plotting import plot_history
@@ -473,10 +509,20 @@ def simulate(
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta)
     exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio, units)
     integ = _integrator(model, tol)
-    if plot is not None:
-        from ._validate import check_writable
+    if plot is None:
+        from ._validate import JaxrockInputError
+
+        for flag, v in (("--t-free", t_free), ("--n-points", n_points)):
+            if v is not None:
+                raise JaxrockInputError(f"{flag} applies to the time-history plot: give --plot FILE.png as well")
+    else:
+        from ._validate import check_positive, check_writable
 
         check_writable("--plot", plot)
+        n_points = 1500 if n_points is None else n_points
+        _check_count("--n-points", n_points)
+        if t_free is not None:
+            check_positive("--t-free", t_free)
     t0 = time.perf_counter()
     sol = _simulate(m, exc, integrator=integ)
     seconds = time.perf_counter() - t0
@@ -487,12 +533,7 @@ def simulate(
 
     stop_point()
     if plot is not None:
-        from ._validate import check_positive
-
-        _check_count("--n-points", n_points)
         p = float(m.block.p_r)
-        if t_free is not None:
-            check_positive("--t-free", t_free)
         tf = 2 * 2 * math.pi / p if t_free is None else t_free
         t_start, t_end = float(exc.t_start), float(exc.t_end)
         if record is None:  # the pulse window is generous (|üg| < 1e-13 a_p): show its core, |ω_p t| <= 8

@@ -20,13 +20,17 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ._validate import JaxrockInputError, check_positive, check_range, is_concrete
+from ._validate import JaxrockInputError, Limit, check_limits, check_range, is_concrete
 
 _BISECTIONS = 64
 
 
 class AbstractExcitation(eqx.Module):
     """Horizontal ground acceleration üg(t) [m/s²]."""
+
+    def limits(self) -> tuple[Limit, ...]:
+        """Valid ranges of the parameters (`jaxrock._validate.Limit`); none by default."""
+        return ()
 
     @abc.abstractmethod
     def __call__(self, t) -> Float[Array, ""]:
@@ -93,7 +97,11 @@ class AbstractRicker(AbstractExcitation):
         check_range("a_p (pulse amplitude) [m/s^2]", self.a_p, -math.inf, math.inf)
         if is_concrete(self.a_p) and np.any(np.asarray(self.a_p) == 0):
             raise JaxrockInputError("a_p = 0: the pulse amplitude must be non-zero (any sign)")
-        check_positive("omega_p (pulse frequency) [rad/s]", self.omega_p)
+        check_limits(self.limits())
+
+    def limits(self) -> tuple[Limit, ...]:
+        return (Limit("|a_p| (pulse amplitude) [m/s^2]", jnp.abs(self.a_p), 0.0, math.inf, lo_open=True, hi_open=True),
+                Limit("omega_p (pulse frequency) [rad/s]", self.omega_p, 0.0, math.inf, lo_open=True, hi_open=True))
 
     def __call__(self, t):
         return self.a_p * self.shape(self.omega_p * t)
@@ -245,12 +253,16 @@ class Record(AbstractExcitation):
             if not np.all(np.isfinite(a)):
                 k = int(np.flatnonzero(~np.isfinite(a))[0])
                 raise JaxrockInputError(f"record acc has a non-finite value ({a[k]}) at sample {k}; all samples must be finite")
-        check_positive("record dt [s]", dt)
-        check_range("record scale", scale, 0.0, math.inf, hi_open=True)
         self.acc = jnp.asarray(acc, dtype=float)
         self.dt = jnp.asarray(dt, dtype=float)
         self.scale = jnp.asarray(scale, dtype=float)
         self.name = name
+        check_limits(self.limits()[1:])  # the samples were checked above, naming the first bad one
+
+    def limits(self) -> tuple[Limit, ...]:
+        return (Limit("record acc (every sample) [m/s^2]", self.acc, ndim=1),
+                Limit("record dt [s]", self.dt, 0.0, math.inf, lo_open=True, hi_open=True),
+                Limit("record scale", self.scale, 0.0, math.inf, hi_open=True))
 
     @property
     def n(self) -> int:

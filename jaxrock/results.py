@@ -20,6 +20,7 @@ class Status(eqx.Enumeration):
     max_steps = "an integration segment hit its step bound (stiff, or too tight a tolerance)"
     solver_failed = "the integrator or a root find failed (step size underflow, divergence, NaN)"
     missed_impact = "an impact surface was crossed without its event firing (report this as a bug)"
+    invalid_input = "a parameter is outside its valid range (given under jax.vmap/jit, where constructors cannot refuse it); the numbers are NaN"
 
 
 STATUS_NAMES: tuple[str, ...] = tuple(Status._name_to_item)  # index = the item's integer value

@@ -40,7 +40,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ._rootfind import SafeNewton
-from ._validate import check_range
+from ._validate import JaxrockInputError, Limit, check_limits
 from .excitation import AbstractExcitation
 from .geometry import G, Block
 from .model import AbstractIntegrator, AbstractModel, check_autodiff, diffrax_adjoint
@@ -100,9 +100,13 @@ class RigidModel(AbstractModel):
     threshold: Float[Array, ""] = 1.0
 
     def __check_init__(self):
-        if self.eta is not None:
-            check_range("eta (impact velocity ratio)", self.eta, 0.0, 1.0)
-        check_range("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True)
+        if not isinstance(self.block, Block):
+            raise JaxrockInputError(f"block must be a jaxrock.Block, got {type(self.block).__name__}")
+        check_limits(self.limits())
+
+    def limits(self) -> tuple[Limit, ...]:
+        eta = () if self.eta is None else (Limit("eta (impact velocity ratio)", self.eta, 0.0, 1.0),)
+        return (*eta, Limit("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True))
 
     @property
     def restitution(self):

@@ -57,7 +57,7 @@ from diffrax import with_stepsize_controller_tols
 from jaxtyping import Array, Float
 
 from . import _linalg, beam
-from ._validate import JaxrockInputError, check_nonnegative, check_positive, check_range
+from ._validate import JaxrockInputError, Limit, check_limits
 from ._peaks import first_exceedance as _first_exceedance
 from ._peaks import hermite_peak as _hermite_peak
 from .excitation import AbstractExcitation
@@ -126,17 +126,20 @@ class Column(eqx.Module):
     I: Float[Array, ""] | None = None
 
     def __init__(self, E, rho=2500.0, A=None, I=None):
-        check_positive("E (Young's modulus) [Pa]", E)
-        check_positive("rho (density) [kg/m^3]", rho)
         if (A is None) != (I is None):
             raise JaxrockInputError("give both the section area A and its second moment I, or neither")
-        if A is not None:
-            check_positive("A (section area) [m^2]", A)
-            check_positive("I (section second moment) [m^4]", I)
         self.E = jnp.asarray(E, dtype=float)
         self.rho = jnp.asarray(rho, dtype=float)
         self.A = None if A is None else jnp.asarray(A, dtype=float)
         self.I = None if I is None else jnp.asarray(I, dtype=float)
+        check_limits(self.limits())
+
+    def limits(self) -> tuple[Limit, ...]:
+        """E from soft rubber to beyond diamond (10⁶–10¹⁵ Pa; 10¹⁴ stands for a rigid column), ρ
+        from foams to beyond osmium (10–3·10⁴ kg/m³): outside these the column is no solid."""
+        section = () if self.A is None else (Limit("A (section area) [m^2]", self.A, 0.0, math.inf, lo_open=True, hi_open=True),
+                                             Limit("I (section second moment) [m^4]", self.I, 0.0, math.inf, lo_open=True, hi_open=True))
+        return (Limit("E (Young's modulus) [Pa]", self.E, 1e6, 1e15), Limit("rho (density) [kg/m^3]", self.rho, 10.0, 3e4), *section)
 
     @classmethod
     def concrete(cls, A=None, I=None) -> "Column":
@@ -559,12 +562,6 @@ class SpringModel(AbstractModel):
             raise JaxrockInputError(f"column must be a jaxrock Column or None, got {type(column).__name__}")
         if not isinstance(n_elements, int) or isinstance(n_elements, bool) or n_elements < 1:
             raise JaxrockInputError(f"n_elements = {n_elements!r}: must be an integer >= 1")
-        check_positive("smoothing (theta_s/alpha)", smoothing)
-        check_range("smoothing (theta_s/alpha)", smoothing, 0.0, 1.0, lo_open=True, hi_open=True)
-        check_nonnegative("zeta (column damping ratio)", zeta)
-        check_range("threshold (overturning |theta|/alpha)", threshold, 0.0, 1.0, lo_open=True)
-        if cbar is not None:
-            check_nonnegative("cbar (damper coefficient)", cbar)
         self.block = block
         self.column = column
         self.added_masses = bool(added_masses)
@@ -574,6 +571,14 @@ class SpringModel(AbstractModel):
         self.n_elements = n_elements
         self.fixed_base = bool(fixed_base)
         self.threshold = threshold
+        check_limits(self.limits())
+
+    def limits(self) -> tuple[Limit, ...]:
+        column = () if self.column is None else self.column.limits()
+        return (Limit("smoothing (theta_s/alpha)", self.smoothing, 0.0, 1.0, lo_open=True, hi_open=True),
+                Limit("zeta (column damping ratio)", self.zeta, 0.0, math.inf, hi_open=True),
+                Limit("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True),
+                Limit("cbar (damper coefficient)", self.cbar, 0.0, math.inf, hi_open=True), *column)
 
     # -- AbstractModel --------------------------------------------------------------------------
     def default_integrator(self) -> "SpringIntegrator | GeneralizedAlpha":

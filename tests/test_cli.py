@@ -86,9 +86,13 @@ def test_spectrum_bad_input_exits_2_naming_the_parameter(tmp_path, args, name):
     assert not (tmp_path / "s.nc").exists()
 
 
-def test_typer_type_errors_exit_2():
-    r = invoke("spectrum", "--n-omega", "abc")
-    assert r.exit_code == 2
+@pytest.mark.parametrize("args, needle", [(["spectrum", "--n-omega", "4.5"], "'--n-omega'"), (["spectrum", "--model", "RIGID"], "'RIGID'"),
+                                          (["spectrum", "--bogus"], "--bogus"), (["bogus"], "'bogus'")])
+def test_usage_errors_are_one_line_exit_2(args, needle):
+    """Click printed a usage line, a hint and a blank line before the error; now one line like every other refusal."""
+    r = invoke(*args)
+    assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1, r.output
+    assert r.output.startswith("Error: ") and needle in r.output and "--help" in r.output
 
 
 def test_every_command_has_help():

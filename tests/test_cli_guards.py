@@ -19,7 +19,7 @@ import typer
 
 import jaxrock as jr
 from jaxrock import JaxrockInputError
-from jaxrock.spectra import Spectrum, overturning_spectrum
+from jaxrock.spectra import Spectrum
 from test_cli import _write, invoke
 
 # -- honest exits: a run that is not ok exits 1 with a line saying what to change -----------------
@@ -259,3 +259,57 @@ def test_lock_of_a_dead_run_is_taken_over_and_released(tmp_path):
             with exclusive(tmp_path / "sp", "--out"):
                 pass
     assert not lock.exists()
+
+
+# -- typos and late errors -----------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["record-spectrum", "--heights", "1,,3"], "--heights = '1,,3' has an empty item"),
+        (["simulate", "--t-free", "-1"], "--t-free applies to the time-history plot"),
+        (["simulate", "--plot", "h.png", "--n-points", "0"], "--n-points = 0; valid: an integer >= 1"),
+        (["simulate", "--plot", "h.png", "--t-free", "-1"], "--t-free = -1 is outside the valid range"),
+        (["simulate", "--tan-alpha", "1e-8"], "tan_alpha = 1e-08 is outside the valid range [0.001, 1)"),
+        (["simulate", "--model", "spring-flexible", "--E", "1e-3"], "E (Young's modulus) [Pa] = 0.001 is outside"),
+        (["simulate", "--model", "spring-flexible", "--rho", "1e12"], "rho (density) [kg/m^3] = 1e+12 is outside"),
+    ],
+)
+def test_typos_and_out_of_range_values_are_refused_before_the_work(tmp_path, monkeypatch, args, needle):
+    """Each was accepted in silence (an empty list item dropped; --t-free without --plot ignored)
+    or failed only after the simulation, or gave a confident wrong answer (tanα = 1e-8; E = 1e-3 Pa)."""
+    monkeypatch.chdir(tmp_path)
+    t0 = time.perf_counter()
+    r = invoke(*args)
+    assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert time.perf_counter() - t0 < 2.0  # before any compilation
+    assert not (tmp_path / "h.png").exists()
+
+
+def test_misspelt_batch_column_is_refused_naming_the_close_match(tmp_path):
+    """`modle=spring` was copied through and the row ran the rigid model."""
+    scenes = _write(tmp_path / "scenes.csv", "id,height,tan_alpha,modle,accel_ratio,omega_ratio\na,10,0.2,spring,3,2\n")
+    r = invoke("batch", scenes, tmp_path / "res.csv")
+    assert r.exit_code == 2 and "unknown column 'modle'; did you mean 'model'?" in r.output, r.output
+    assert not (tmp_path / "res.csv").exists()
+
+
+def test_byte_order_marks_are_accepted_in_scenes_and_records(tmp_path):
+    """A spreadsheet's UTF-8 byte-order mark made the scenes file report "no 'height' column" and
+    a two-column record refuse its first line."""
+    from jaxrock.batch import read_scenes
+
+    (tmp_path / "rec.txt").write_text("0 0.1\n0.01 0.2\n0.02 -0.1\n", encoding="utf-8-sig")
+    assert jr.read_record(tmp_path / "rec.txt").n == 3
+    scenes = tmp_path / "scenes.csv"
+    scenes.write_text("height,tan_alpha,pulse\n10,0.2,rec.txt\n", encoding="utf-8-sig")
+    (scene,), header = read_scenes(scenes)
+    assert header == ["height", "tan_alpha", "pulse"] and scene.excitation.n == 3
+
+
+def test_compressed_record_is_refused_without_printing_its_bytes(tmp_path):
+    import gzip
+
+    at2 = Path(jr.__file__).parent / "data" / "IELC180.AT2"
+    (tmp_path / "x.AT2").write_bytes(gzip.compress(at2.read_bytes()))
+    r = invoke("simulate", "--record", tmp_path / "x.AT2")
+    assert r.exit_code == 2 and "gzip-compressed; decompress it first" in r.output and len(r.output) < 300, r.output

@@ -169,14 +169,16 @@ def jacobian(x: np.ndarray, pulse: str = "symmetric") -> np.ndarray:
     return np.asarray(jac)[: len(x)]
 
 
-def central_differences(x: np.ndarray, rel: float, values_of=None, top: int | None = None) -> np.ndarray:
+def central_differences(x: np.ndarray, rel: float, values_of=None, top: int | None = None, bottom: int | None = None) -> np.ndarray:
     """Central differences of `values_of` (rows of parameters → rows of outputs; default the RM's
-    `values`) with a step `rel` × the parameter; in column `top`, where the parameter is at the top
-    of its range (1: η), a one-sided second-order difference."""
+    `values`) with a step `rel` × the parameter. At the edge of a parameter's valid range, where a
+    step outside would be `invalid_input` (NaN), a one-sided second-order difference: in column
+    `top` where the value is at its top (1: η) and in column `bottom` where it is at its bottom
+    (1: the base factor b′/b)."""
     values_of = values if values_of is None else values_of
     n, m = x.shape
     steps = rel * np.abs(x)
-    shifts = (+1, -1) if top is None else (+1, -1, -2)
+    shifts = (+1, -1, -2, +2)
     shifted = []
     for k in range(m):
         for sgn in shifts:
@@ -184,12 +186,17 @@ def central_differences(x: np.ndarray, rel: float, values_of=None, top: int | No
             y[:, k] += sgn * steps[:, k]
             shifted.append(y)
     v = values_of(np.concatenate(shifted)).reshape(m, len(shifts), n, 3)  # param, shift, scene, output
-    fd = (v[:, 0] - v[:, 1]) / (2 * steps.T[:, :, None])
+    h2 = 2 * steps.T[:, :, None]
+    fd = (v[:, 0] - v[:, 1]) / h2
+    edges = []
     if top is not None:
-        one_sided = (3 * values_of(x)[None] - 4 * v[:, 1] + v[:, 2]) / (2 * steps.T[:, :, None])
-        at_top = np.zeros((m, n), bool)
-        at_top[top] = x[:, top] >= 1.0
-        fd = np.where(at_top[:, :, None], one_sided, fd)
+        edges.append((top, (3 * values_of(x)[None] - 4 * v[:, 1] + v[:, 2]) / h2, x[:, top] >= 1.0))
+    if bottom is not None:
+        edges.append((bottom, (-3 * values_of(x)[None] + 4 * v[:, 0] - v[:, 3]) / h2, x[:, bottom] <= 1.0))
+    for col, one_sided, at_edge in edges:
+        where = np.zeros((m, n), bool)
+        where[col] = at_edge
+        fd = np.where(where[:, :, None], one_sided, fd)
     return fd.transpose(1, 2, 0)  # scene, output, param
 
 
@@ -224,7 +231,7 @@ def test_rigid_gradients_match_central_differences_at_the_default_integrator():
         ]
     )
     jac = jacobian(x)
-    err = relative_error(jac, central_differences(x, 1e-5, top=PARAMS.index("eta")))
+    err = relative_error(jac, central_differences(x, 1e-5, top=PARAMS.index("eta"), bottom=PARAMS.index("base")))
     assert err.max() < 1e-5, np.array2string(err.max(axis=2), precision=1)
     assert np.all(jac[:4, T_OVERTURN] == 0) and np.all(jac[4:, MAX_THETA] == 0)
     assert np.all(np.abs(jac[:4, MAX_THETA]).max(axis=1) > 1e-2) and np.all(np.abs(jac[4:, T_OVERTURN]).max(axis=1) > 1e-2)
@@ -270,7 +277,7 @@ def test_gradients_follow_the_laws_next_to_the_boundary():
         assert changes[-1] < changes[0], law
     p = float(jr.Block.from_slenderness(10.0, 0.2).p_r)
     assert above[-1] == pytest.approx(-0.5 / p, rel=1e-3)
-    fd = central_differences(x[[1, 5]], 1e-7, top=PARAMS.index("eta"))[:, :, 0]  # step 1e-7 a*: a tenth of the distance
+    fd = central_differences(x[[1, 5]], 1e-7, top=PARAMS.index("eta"), bottom=PARAMS.index("base"))[:, :, 0]  # step 1e-7 a*: a tenth of the distance
     np.testing.assert_allclose(jac[[1, 5], [MAX_THETA, T_OVERTURN]], fd[[0, 1], [MAX_THETA, T_OVERTURN]], rtol=1e-3)
 
 
@@ -318,7 +325,7 @@ def test_spring_gradients_match_central_differences():
     jac = np.asarray(jac)
     assert np.all(np.asarray(s.status == jr.Status.ok)) and np.all(np.isfinite(jac))
     assert list(np.asarray(s.overturned)) == [False, False, False, True]
-    err = relative_error(jac, central_differences(x, 1e-4, lambda y: np.asarray(val_p(jnp.asarray(y)))))
+    err = relative_error(jac, central_differences(x, 1e-4, lambda y: np.asarray(val_p(jnp.asarray(y))), bottom=SM_PARAMS.index("base")))
     assert err.max() < 1e-5, np.array2string(err.max(axis=2), precision=1)
     assert np.all(jac[3, MAX_THETA] == 0) and np.all(jac[:3, T_OVERTURN] == 0)
 

@@ -1,0 +1,82 @@
+"""Hostile input through the Python API (issue 19): a parameter outside its range is refused at
+construction in one line, and under `jax.vmap`/`jax.jit` — where constructors see tracers and
+cannot refuse — the run says so with `Status.invalid_input` instead of a plausible `ok`."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrock as jr
+from jaxrock import JaxrockInputError
+
+
+def test_invalid_parameters_under_vmap_are_flagged_not_answered():
+    """NaN a_p, ω_p ≤ 0, tanα outside [1e-3, 1) and a negative height came back `ok` with θ/α of
+    0, 3.31 or 1.99; each lane is now `invalid_input` with NaN numbers, and the valid lane in the
+    same batch equals its unbatched run."""
+
+    def run(height, tan_alpha, a_p, omega_p):
+        block = jr.Block.from_slenderness(height, tan_alpha)
+        return jr.simulate(jr.RigidModel(block), jr.RickerPulse(a_p, omega_p))
+
+    lanes = [(10.0, 0.2, 5.0, 6.0), (10.0, 0.2, np.nan, 6.0), (10.0, 0.2, 5.0, -1.0), (10.0, 1.5, 5.0, 6.0),
+             (10.0, 1e-8, 5.0, 6.0), (-10.0, 0.2, 5.0, 6.0), (10.0, 0.2, 0.0, 6.0)]
+    sol = jax.jit(jax.vmap(run))(*map(jnp.asarray, zip(*lanes)))
+    names = list(jr.status_names(sol.status))
+    assert names == ["ok"] + ["invalid_input"] * (len(lanes) - 1)
+    assert np.all(np.isnan(np.asarray(sol.max_theta)[1:])) and not np.any(np.asarray(sol.overturned)[1:])
+    one = jr.simulate(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), jr.RickerPulse(5.0, 6.0))
+    assert float(sol.max_theta[0]) == pytest.approx(float(one.max_theta), abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    "build, needle",
+    [
+        (lambda: jr.Block.from_slenderness(10.0, 1e-8), "tan_alpha = 1e-08 is outside the valid range [0.001, 1)"),
+        (lambda: jr.Column(1e-3), "E (Young's modulus) [Pa] = 0.001 is outside the valid range [1e+06, 1e+15]"),
+        (lambda: jr.Column(30e9, 1e12), "rho (density) [kg/m^3] = 1e+12 is outside the valid range [10, 30000]"),
+        (lambda: jr.simulate(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), jr.RickerPulse(5.0, 6.0), t1=-1.0),
+         "t1 (end time) applies to a time history"),
+    ],
+)
+def test_out_of_range_or_ignored_parameters_are_refused(build, needle):
+    """Each returned a confident answer before: tanα = 1e-8 θ/α = 1.000000 not overturned; E = 1e-3 Pa
+    or ρ = 1e12 kg/m³ θ/α = 0, ok; t1 = -1 and t1 = 1e9 the same summary (t1 was ignored)."""
+    with pytest.raises(JaxrockInputError, match=re.escape(needle)):
+        build()
+
+
+@pytest.mark.parametrize(
+    "build, needle",
+    [
+        (lambda: jr.RigidModel("block"), "block must be a jaxrock.Block, got str"),
+        (lambda: jr.simulate(jr.RigidModel(jr.Block.from_slenderness(10.0, [0.1, 0.2])), jr.RickerPulse(5.0, 6.0)),
+         "tan_alpha = b/h has shape (2,); simulate runs one scene"),
+        (lambda: jr.simulate(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), jr.RickerPulse([1.0, 2.0], 6.0)),
+         "|a_p| (pulse amplitude) [m/s^2] has shape (2,); simulate runs one scene"),
+        (lambda: jr.Block.from_size(10.0 + 1j, 2.0), "height (2h) [m] = (10+1j) is complex"),
+        (lambda: jr.Block.from_slenderness(None, 0.2), "height (2h) [m] is missing (None)"),
+        (lambda: jr.Block.from_slenderness("ten", 0.2), "height (2h) [m] = 'ten' is not a number"),
+    ],
+)
+def test_wrong_kinds_of_value_are_refused_at_construction(build, needle):
+    """These failed later inside JAX (an AttributeError, an incompatible-shapes TypeError, a raw
+    TypeError) or named the value wrongly ("height = nan" for None)."""
+    with pytest.raises(JaxrockInputError, match=re.escape(needle)):
+        build()
+
+
+@pytest.mark.parametrize("value", ["0", "garbage"])
+def test_float32_mode_is_gone_and_its_variable_refused(value):
+    """JAXROCK_X64=0 ended the default scene in max_steps with θ/α = 0; any value but 1 now stops the import."""
+    env = {**os.environ, "JAXROCK_X64": value}
+    r = subprocess.run([sys.executable, "-c", "import jaxrock"], env=env, capture_output=True, text=True)
+    assert r.returncode != 0 and f"JAXROCK_X64 = '{value}': jaxrock runs in float64 only" in r.stderr
