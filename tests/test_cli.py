@@ -244,7 +244,7 @@ def test_batch_round_trip_and_resume(tmp_path):
 @pytest.mark.parametrize(
     "bad, where",
     [
-        ("b,5,1.5,,symmetric,3,,2,,", ["row 2", "line 3", "'tan_alpha'", "(0, 1)"]),
+        ("b,5,1.5,,symmetric,3,,2,,", ["row 2", "line 3", "'tan_alpha'", "[0.001, 1)"]),
         ("b,-5,0.1,,symmetric,3,,2,,", ["row 2", "'height'", "(0, inf)"]),
         ("b,5,0.1,,symmetric,3,,abc,,", ["row 2", "'omega_ratio'", "not a number"]),
         ("b,5,0.1,,triangle,3,,2,,", ["row 2", "'pulse'", "symmetric"]),

@@ -302,8 +302,8 @@ def test_byte_order_marks_are_accepted_in_scenes_and_records(tmp_path):
     assert jr.read_record(tmp_path / "rec.txt").n == 3
     scenes = tmp_path / "scenes.csv"
     scenes.write_text("height,tan_alpha,pulse\n10,0.2,rec.txt\n", encoding="utf-8-sig")
-    (scene,), header = read_scenes(scenes)
-    assert header == ["height", "tan_alpha", "pulse"] and scene.excitation.n == 3
+    s = read_scenes(scenes)
+    assert s.header == ["height", "tan_alpha", "pulse"] and s.records[0].n == 3
 
 
 def test_compressed_record_is_refused_without_printing_its_bytes(tmp_path):
