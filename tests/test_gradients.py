@@ -178,25 +178,22 @@ def central_differences(x: np.ndarray, rel: float, values_of=None, top: int | No
     values_of = values if values_of is None else values_of
     n, m = x.shape
     steps = rel * np.abs(x)
-    shifts = (+1, -1, -2, +2)
-    shifted = []
-    for k in range(m):
-        for sgn in shifts:
-            y = x.copy()
-            y[:, k] += sgn * steps[:, k]
-            shifted.append(y)
-    v = values_of(np.concatenate(shifted)).reshape(m, len(shifts), n, 3)  # param, shift, scene, output
+    def shifted(k: int, sgn: int) -> np.ndarray:
+        y = x.copy()
+        y[:, k] += sgn * steps[:, k]
+        return y
+
+    edges = [(col, sgn) for col, sgn in ((top, -1), (bottom, +1)) if col is not None]
+    blocks = [shifted(k, sgn) for k in range(m) for sgn in (+1, -1)] + ([x] if edges else []) + [shifted(c, 2 * sgn) for c, sgn in edges]
+    v = values_of(np.concatenate(blocks)).reshape(len(blocks), n, 3)  # one call: one batch shape
+    central = v[: 2 * m].reshape(m, 2, n, 3)  # param, shift, scene, output
     h2 = 2 * steps.T[:, :, None]
-    fd = (v[:, 0] - v[:, 1]) / h2
-    edges = []
-    if top is not None:
-        edges.append((top, (3 * values_of(x)[None] - 4 * v[:, 1] + v[:, 2]) / h2, x[:, top] >= 1.0))
-    if bottom is not None:
-        edges.append((bottom, (-3 * values_of(x)[None] + 4 * v[:, 0] - v[:, 3]) / h2, x[:, bottom] <= 1.0))
-    for col, one_sided, at_edge in edges:
-        where = np.zeros((m, n), bool)
-        where[col] = at_edge
-        fd = np.where(where[:, :, None], one_sided, fd)
+    fd = (central[:, 0] - central[:, 1]) / h2
+    for j, (col, sgn) in enumerate(edges):  # second order, one-sided into the range: (-3 f0 + 4 f1 - f2) / 2h
+        near, far = central[col, 0 if sgn > 0 else 1], v[2 * m + 1 + j]
+        one_sided = sgn * (-3 * v[2 * m] + 4 * near - far) / h2[col]
+        at_edge = x[:, col] >= 1.0 if sgn < 0 else x[:, col] <= 1.0
+        fd[col] = np.where(at_edge[:, None], one_sided, fd[col])
     return fd.transpose(1, 2, 0)  # scene, output, param
 
 

@@ -60,38 +60,45 @@ def _interrupt(args, cwd, pattern, sig=signal.SIGINT):
     return w.finish()
 
 
-def test_sigint_during_refinement_keeps_the_grid_and_resumes_to_the_same_spectrum(tmp_path):
+def test_sigint_during_refinement_keeps_the_grid_and_resumes_without_recomputing_it(tmp_path):
     """The grid is done (16/16) and the refinement compiles and runs: SIGINT there kept nothing
     and crashed (exit 139) before; now it exits 130, keeps all 16 cells, and the rerun only
-    refines. The resumed spectrum equals an uninterrupted one bit for bit."""
-    out, ref = tmp_path / "sp", tmp_path / "ref"
-    uninterrupted = _Watch(_jaxrock(*_spectrum_args(ref), "--no-checkpoint", cwd=tmp_path))
+    refines, its grid the kept cells bit for bit."""
+    out = tmp_path / "sp"
     rc, _, err = _interrupt(_spectrum_args(out), tmp_path, r"16/16")
     assert rc == 130, err[-2000:]
     assert "interrupted: 16 of 16 cells kept" in err and "resume with: jaxrock spectrum" in err
     assert not Path(f"{out}.nc").exists() and Path(f"{out}.checkpoint").is_dir()
-    w = _Watch(_jaxrock(*_spectrum_args(out), cwd=tmp_path))
-    rc, stdout, err = w.finish()
+    kept = {}
+    for f in Path(f"{out}.checkpoint").glob("batch_*.npz"):
+        with np.load(f) as z:
+            kept[int(z["start"])] = z["max_theta"].copy()
+    rc, stdout, err = _Watch(_jaxrock(*_spectrum_args(out), cwd=tmp_path)).finish()
     assert rc == 0, err[-2000:]
     assert not re.search(r"\b[0-9]/16\b", err), "the resumed run recomputed grid cells"
     assert not Path(f"{out}.checkpoint").exists()
-    assert uninterrupted.finish()[0] == 0
-    with xr.open_dataset(f"{out}.nc", engine="scipy") as a, xr.open_dataset(f"{ref}.nc", engine="scipy") as b:
-        for k in ("max_theta", "overturned", "uplifted", "status", "uplift_boundary", "overturn_boundary"):
-            np.testing.assert_array_equal(a[k].values, b[k].values, err_msg=k)
+    with xr.open_dataset(f"{out}.nc", engine="scipy") as a:
+        grid = a["max_theta"].values.ravel()
+    np.testing.assert_array_equal(np.concatenate([kept[k] for k in sorted(kept)]), grid)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("moment, sig", [(r"0/16", signal.SIGINT), (r"[48]/16", signal.SIGTERM)])
-def test_signal_during_compile_or_mid_grid_exits_130_and_keeps_what_finished(tmp_path, moment, sig):
-    out = tmp_path / "sp"
+def test_signal_during_compile_or_mid_grid_exits_130_and_resumes_to_the_uninterrupted_spectrum(tmp_path, moment, sig):
+    """Stopped while compiling or between batches, resumed, the spectrum equals an uninterrupted
+    run's bit for bit (the grid and the refined lines)."""
+    out, ref = tmp_path / "sp", tmp_path / "ref"
+    uninterrupted = _Watch(_jaxrock(*_spectrum_args(ref), "--no-checkpoint", cwd=tmp_path))
     rc, _, err = _interrupt(_spectrum_args(out), tmp_path, moment, sig)
     assert rc == 130, err[-2000:]
     kept = int(re.search(r"interrupted: (\d+) of 16 cells kept", err).group(1))
     assert kept % 4 == 0 and kept >= 4  # the batch in progress finishes first
-    w = _Watch(_jaxrock(*_spectrum_args(out), cwd=tmp_path))
-    rc, _, err = w.finish()
+    rc, _, err = _Watch(_jaxrock(*_spectrum_args(out), cwd=tmp_path)).finish()
     assert rc == 0 and f"{kept}/16" in err
+    assert uninterrupted.finish()[0] == 0
+    with xr.open_dataset(f"{out}.nc", engine="scipy") as a, xr.open_dataset(f"{ref}.nc", engine="scipy") as b:
+        for k in ("max_theta", "overturned", "uplifted", "status", "uplift_boundary", "overturn_boundary"):
+            np.testing.assert_array_equal(a[k].values, b[k].values, err_msg=k)
 
 
 def test_sigterm_mid_batch_keeps_finished_rows_and_resume_completes_them(tmp_path):

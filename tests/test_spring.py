@@ -191,6 +191,7 @@ def test_exact_peak_not_sample():
     assert bool(s.uplifted) and float(s.t_uplift) < 0
 
 
+@pytest.mark.slow  # 40 s; the default run checks d/dc̄ in test_gradients' spring central differences (all six parameters)
 def test_grad_wrt_cbar_matches_finite_differences():
     blk = Block.from_slenderness(10.0, 0.2)
     ex = RickerPulse(4 * G * 0.2, 2 * math.pi)
@@ -251,7 +252,7 @@ def test_energy_balance_flexible():
     "integrator, tol",
     [
         # the ESDIRK run this equivalence was established with (docstring numbers)
-        (SpringIntegrator(rtol=1e-6, atol=1e-6, solver="kvaerno5"), 1e-4),
+        pytest.param(SpringIntegrator(rtol=1e-6, atol=1e-6, solver="kvaerno5"), 1e-4, marks=pytest.mark.slow),  # 27 s; generalized-α runs by default
         # generalized-α, 2nd order: its global error is ~ (steps × tolerance), measured on this
         # scene 2.2e-3 at the default 1e-5, 4.5e-4 at 1e-6, 1.2e-5 at 1e-7, 2.1e-5 at 1e-8 —
         # 1e-7 with 1e-4 keeps the test about the model (the FE column's compliance), not the solver
