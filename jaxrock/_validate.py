@@ -35,6 +35,20 @@ def _values(name: str, x) -> np.ndarray:
     return a.astype(float).ravel()
 
 
+def in_range(v, lo: float = -math.inf, hi: float = math.inf, *, lo_open: bool = False, hi_open: bool = False):
+    """Elementwise: finite and within the interval (NumPy or JAX arrays alike; NaN is outside)."""
+    return (abs(v) < math.inf) & ((v > lo) if lo_open else (v >= lo)) & ((v < hi) if hi_open else (v <= hi))
+
+
+def is_number(text: str) -> bool:
+    """Whether `float` reads the text."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def check_range(
     name: str,
     x,
@@ -53,11 +67,7 @@ def check_range(
     rng = f"{lb}{lo:g}, {hi:g}{rb}"
     if v.size == 0:
         raise JaxrockInputError(f"{name} is empty; expected values in {rng}")
-    bad = ~np.isfinite(v)
-    if math.isfinite(lo) or lo_open:
-        bad |= (v <= lo) if lo_open else (v < lo)
-    if math.isfinite(hi) or hi_open:
-        bad |= (v >= hi) if hi_open else (v > hi)
+    bad = ~in_range(v, lo, hi, lo_open=lo_open, hi_open=hi_open)
     if bad.any():
         first = v[bad][0]
         raise JaxrockInputError(f"{name} = {first:g} is outside the valid range {rng}")
@@ -95,11 +105,7 @@ def within_limits(limits):
     """Whether every value is finite and within its limit: a JAX boolean (traceable)."""
     ok = jnp.asarray(True)
     for lim in limits:
-        v = jnp.asarray(lim.value)
-        inside = jnp.isfinite(v)
-        inside &= (v > lim.lo) if lim.lo_open else (v >= lim.lo)
-        inside &= (v < lim.hi) if lim.hi_open else (v <= lim.hi)
-        ok &= jnp.all(inside)
+        ok &= jnp.all(in_range(jnp.asarray(lim.value), lim.lo, lim.hi, lo_open=lim.lo_open, hi_open=lim.hi_open))
     return ok
 
 

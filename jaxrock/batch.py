@@ -76,7 +76,7 @@ from tqdm.auto import tqdm
 
 from . import interrupt, provenance
 from ._files import exclusive, output_stem, same_file, write_atomically
-from ._validate import JaxrockInputError, check_range, within_limits
+from ._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
 from .excitation import Record
 from .geometry import TAN_ALPHA_MIN, Block
 from .spectra import PULSES, run_batch
@@ -157,9 +157,9 @@ class _Table:
             v[present] = raw.astype(float)
         except ValueError:
             bad = np.zeros(self.n, bool)
-            bad[np.flatnonzero(present)[[not _is_number(x) for x in raw].index(True)]] = True
+            bad[np.flatnonzero(present)[[not is_number(x) for x in raw].index(True)]] = True
             self.fail(bad, col, lambda i: f"{self.cells[col][i]!r} is not a number")
-        inside = np.isfinite(v) & ((v > lo) if lo_open else (v >= lo)) & ((v < hi) if hi_open else (v <= hi))
+        inside = in_range(v, lo, hi, lo_open=lo_open, hi_open=hi_open)
 
         def why(i):
             try:
@@ -177,14 +177,6 @@ class _Table:
         self.fail(rows & self.has(a) & self.has(b), a, f"give either '{a}' or '{b}' ({what}), not both")
         self.fail(rows & ~self.has(a) & ~self.has(b), a, f"missing: give '{a}' or '{b}' ({what})")
         return self.has(a)
-
-
-def _is_number(x: str) -> bool:
-    try:
-        float(x)
-    except ValueError:
-        return False
-    return True
 
 
 def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
@@ -228,16 +220,9 @@ def scene_model(kind: str, block: Block, *, eta=None, cbar=None, E=None, rho=Non
 DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA = 30e9, 2500.0, 0.01  # concrete (paper sections 4–6)
 
 
-def _lanes(tree, idx):
-    """The lanes `idx` of a stacked pytree."""
-    return jax.tree_util.tree_map(lambda x: x[idx] if eqx.is_array(x) else x, tree)
-
-
-def _invalid_lanes(objs) -> np.ndarray:
-    """Per lane of stacked values: whether some parameter is outside its limits."""
-    limits = [lim for o in objs for lim in o.limits()]
-    return ~np.asarray(jax.vmap(lambda *vs: within_limits([lim._replace(value=v) for lim, v in zip(limits, vs)]))(
-        *[jnp.asarray(lim.value) for lim in limits]))
+def _invalid_lanes(stacked) -> np.ndarray:
+    """Per lane of a stacked value (a `Block`, a `Column`): whether a parameter is outside its limits."""
+    return ~np.asarray(jax.vmap(lambda one: within_limits(one.limits()))(stacked))
 
 
 @dataclass
@@ -290,7 +275,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
            lambda i: f"tan_alpha_base = {tan_b[i]:g} < tan_alpha = {tan_a[i]:g}; valid: [tan_alpha, 1)")
     tan_b = np.where(np.isnan(tan_b), tan_a, tan_b)  # no base: b′ = b
     blocks = jax.vmap(Block.from_slenderness)(jnp.asarray(height), jnp.asarray(tan_a), jnp.asarray(tan_b))
-    t.fail(_invalid_lanes([blocks]), None, lambda i: _refusal(lambda: Block.from_slenderness(height[i], tan_a[i], tan_b[i])))
+    t.fail(_invalid_lanes(blocks), None, lambda i: _refusal(lambda: Block.from_slenderness(height[i], tan_a[i], tan_b[i])))
 
     eta = t.num("eta", 0.0, 1.0)
     cbar = t.num("cbar", 0.0, math.inf, hi_open=True)
@@ -308,7 +293,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     }
     flexible = kind == "spring-flexible"
     columns = jax.vmap(Column)(jnp.asarray(params["E"]), jnp.asarray(params["rho"]))
-    t.fail(flexible & _invalid_lanes([columns]), None, lambda i: _refusal(lambda: Column(params["E"][i], params["rho"][i])))
+    t.fail(flexible & _invalid_lanes(columns), None, lambda i: _refusal(lambda: Column(params["E"][i], params["rho"][i])))
 
     pulse = t.text("pulse", "symmetric").astype(str)
     exc = np.char.lower(pulse).astype(object)  # room for "record:<n>"

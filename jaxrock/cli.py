@@ -20,6 +20,7 @@ import numpy as np
 import typer
 import typer.core
 
+
 class _OneLineErrors(typer.core.TyperGroup):
     """Click's usage errors (an unknown choice, a non-integer count, an unknown option) as one line,
     `Error: … (see 'jaxrock CMD --help')`, exit code 2, like every other bad input; click printed
@@ -216,9 +217,9 @@ def _axis(name: str, lo: float, hi: float, n: int) -> np.ndarray:
 
 def parse_values(name: str, text: str) -> np.ndarray:
     """A list option: "1,2,5" (values) or "a:b:n" (n values evenly spaced from a to b)."""
-    from ._validate import JaxrockInputError
-
     import re
+
+    from ._validate import JaxrockInputError
 
     text = text.strip()
     items = re.split(r"\s*,\s*|\s+", text)
@@ -569,9 +570,7 @@ def batch(
     t_overturn, uplifted, t_uplift, n_impacts, status.
     """
     from ._validate import check_writable
-    from .batch import run_scenes
-
-    from .batch import count_results, results_path_for
+    from .batch import count_results, results_path_for, run_scenes
     from .interrupt import Interrupted
 
     results = results_path_for(scenes, results)

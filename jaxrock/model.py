@@ -64,6 +64,11 @@ class AbstractModel(eqx.Module):
         return ()
 
 
+def scene_limits(model: AbstractModel, excitation: AbstractExcitation) -> tuple[Limit, ...]:
+    """Every parameter limit of a scene: the block's, the model's and the excitation's."""
+    return model.block.limits() + model.limits() + excitation.limits()
+
+
 def simulate(
     model: AbstractModel,
     excitation: AbstractExcitation,
@@ -89,7 +94,7 @@ def simulate(
         raise JaxrockInputError(
             f"excitation must be a jaxrock excitation (RickerPulse, AntisymmetricRickerPulse, Record), got {type(excitation).__name__}"
         )
-    check_one_scene(model.block.limits() + model.limits() + excitation.limits())
+    check_one_scene(scene_limits(model, excitation))
     if save is None and t1 is not None:
         raise JaxrockInputError("t1 (end time) applies to a time history (save=Save(ts, fields)); a summary runs until "
                                 "its answer is fixed (overturned, at rest, or only decaying peaks left): leave t1 out")
@@ -114,7 +119,7 @@ def simulate(
 def _run(model, excitation, integrator, save, t1):
     # Compiled once per structure (model kind, mesh, save request): repeated calls with new
     # numbers reuse it. Composes with an outer jit, vmap and grad.
-    ok = within_limits(model.block.limits() + model.limits() + excitation.limits())
+    ok = within_limits(scene_limits(model, excitation))
     model, excitation = _neutral(model, ok), _neutral(excitation, ok)
     return flag_invalid(model.run(excitation, integrator, save, t1), ok)
 

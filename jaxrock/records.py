@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validate import JaxrockInputError
+from ._validate import JaxrockInputError, is_number
 from .excitation import Record
 from .geometry import G
 
@@ -68,21 +68,13 @@ def _read_lines(path: Path) -> list[str]:
     return lines
 
 
-def _is_float(token: str) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
-
-
 def _parse_row(line: str, lineno: int, source) -> np.ndarray:
     """The numbers on one line (separated by whitespace or commas), all finite."""
     tokens = line.replace(",", " ").split()
     try:
         row = np.array(tokens, dtype=float)
     except ValueError:
-        bad = next(t for t in tokens if not _is_float(t))
+        bad = next(t for t in tokens if not is_number(t))
         raise JaxrockInputError(
             f"{source}: line {lineno}: non-numeric token {bad!r}; expected numbers such as -0.0064 or -.6403182E-02"
         ) from None
