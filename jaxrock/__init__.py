@@ -58,7 +58,8 @@ from .batch import read_scenes, run_scenes
 __all__ += ["read_scenes", "run_scenes"]
 
 from .generalized_alpha import GeneralizedAlpha
-from .spring import DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17, first_period_eq21, pushover_eq9
+from .backbone import AbstractBackbone, Bilinear, Tanh
+from .spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17, first_period_eq21, pushover_eq9
 from .calibration import CalibrationResult, calibrate_cbar, calibration_report, energy_ratio, fit_power_law, rm_target
 
 __all__ += [
@@ -67,6 +68,10 @@ __all__ += [
     "SpringIntegrator",
     "GeneralizedAlpha",
     "DEFAULT_SMOOTHING",
+    "DEFAULT_BACKBONE",
+    "AbstractBackbone",
+    "Bilinear",
+    "Tanh",
     "cbar_eq17",
     "first_period_eq21",
     "pushover_eq9",

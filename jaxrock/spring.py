@@ -8,11 +8,12 @@ Two scenes share one model value, `SpringModel`:
   elements (`jaxrock.beam`) on the rotational spring, gravity preloaded, stiffness-proportional
   Rayleigh damping on the column's deformation (section 4).
 
-Base spring (section 3, Figure 2 right, smoothed): ``M(θ) = My tanh(θ/θs)``, elastic (it unloads
-along its loading path), ``My = m g R′ sinα′ = m g b′`` (b′ = b for a plain block), with the
-potential ``My θs log cosh(θ/θs)``. ``θs = smoothing · α′``; the pre-yield stiffness is
-``My/θs``. Damper in parallel: ``c = c̄ m g^0.5 R′^1.5`` (eqs. 17–18), by default with
-``c̄ = 0.02 (α′/0.1)²`` (eq. 17). For an extended base the rocking quantities α′, R′ are used
+Base spring (section 3, Figure 2 right): nonlinear elastic (it unloads along its loading path),
+rigid-plastic in the limit, yield moment ``My = m g R′ sinα′ = m g b′`` (b′ = b for a plain
+block), with a finite pre-yield rotation ``θs = smoothing · α′`` (stiffness ``My/θs``): the
+bilinear backbone, linear to θy = θs then flat at My (the paper's), or ``M = My tanh(θ/θs)``
+(`jaxrock.backbone`; the potential is the backbone's integral). Damper in parallel:
+``c = c̄ m g^0.5 R′^1.5`` (eqs. 17–18), by default with ``c̄ = 0.02 (α′/0.1)²`` (eq. 17). For an extended base the rocking quantities α′, R′ are used
 in eq. 17/18, because the damper stands for the impact losses at the base's corners, which are
 governed by α′ (the paper: "computed using Equation (17)"); give ``cbar`` to override.
 
@@ -58,6 +59,7 @@ from jaxtyping import Array, Float
 
 from . import _linalg, beam
 from ._validate import JaxrockInputError, Limit, check_limits
+from .backbone import AbstractBackbone, as_backbone
 from ._peaks import first_exceedance as _first_exceedance
 from ._peaks import hermite_peak as _hermite_peak
 from .excitation import AbstractExcitation
@@ -71,7 +73,7 @@ from .results import Solution, Status
 # 1e-4 → 6.7e-3, while the cost per scene stayed flat (1.5–6.6 ms, no trend): the implicit solver
 # pays little for a stiffer pre-yield branch, so the stiff end is taken.
 DEFAULT_SMOOTHING = 1e-4
-UPLIFT_FACTOR = 3.0  # uplifted: |θ| > 3 θs, i.e. the spring moment passed tanh(3) = 99.5 % of My
+DEFAULT_BACKBONE = "tanh"
 QUASI_RIGID_RHO = 2500.0  # kg/m³: mass of the quasi-rigid scene (results do not depend on it)
 
 HISTORY_FIELDS = (
@@ -105,11 +107,6 @@ def first_period_eq21(h, tan_alpha, E, rho):
 def pushover_eq9(theta, alpha):
     """Eq. 9: SM pushover F/(m g) = tanα/cosθ − tanθ (force at the column's mid-height)."""
     return jnp.tan(alpha) / jnp.cos(theta) - jnp.tan(theta)
-
-
-def _logcosh(x):
-    ax = jnp.abs(x)
-    return ax + jnp.log1p(jnp.exp(-2 * ax)) - math.log(2.0)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -168,6 +165,7 @@ class _Mechanics(eqx.Module):
     n: int | None = eqx.field(static=True)  # None: one-DOF quasi-rigid
     fixed_base: bool = eqx.field(static=True)
     track_energy: bool = eqx.field(static=True)
+    backbone: AbstractBackbone = eqx.field(static=True)
     h: Array
     m: Array
     My: Array
@@ -191,12 +189,17 @@ class _Mechanics(eqx.Module):
     def ndof(self) -> int:
         return 1 if self.n is None else beam.n_dof(self.n)
 
+    @property
+    def theta_up(self):
+        """Uplift rotation: the spring has (all but) yielded beyond it (`AbstractBackbone.band` θs)."""
+        return self.backbone.band * self.theta_s
+
     # -- energies -------------------------------------------------------------------------------
     def spring_potential(self, theta):
-        return self.My * self.theta_s * _logcosh(theta / self.theta_s)
+        return self.backbone.potential(theta, self.My, self.theta_s)
 
     def spring_moment(self, theta):
-        return self.My * jnp.tanh(theta / self.theta_s)
+        return self.backbone.moment(theta, self.My, self.theta_s)
 
     def _column_potential(self, q):
         """Gravity (+ strain) potential of the column, spring excluded."""
@@ -527,7 +530,10 @@ class SpringModel(AbstractModel):
     - `column`: `Column` (E, ρ, optional A, I) or None for the one-DOF quasi-rigid SM;
     - `added_masses` (static): add ΔI = I′o − (4/3) m h² (SPEC; paper section 3.3);
     - `cbar`: damper coefficient c̄ (default eq. 17 with α′);
-    - `smoothing`: θs/α′ of the tanh spring (default `DEFAULT_SMOOTHING`);
+    - `backbone` (static): the spring's moment–rotation curve, `jaxrock.backbone.Bilinear` or
+      `Tanh` (or their names; default `DEFAULT_BACKBONE`);
+    - `smoothing`: θs/α′, the backbone's pre-yield rotation (the bilinear yield rotation θy, or
+      the tanh's θs; default `DEFAULT_SMOOTHING`);
     - `zeta`: column damping ratio in its first fixed-base mode (stiffness proportional);
     - `n_elements` (static), `fixed_base` (static: base rotation clamped, section 6);
     - `threshold`: overturned when |θ| ≥ threshold·α′.
@@ -539,6 +545,7 @@ class SpringModel(AbstractModel):
     smoothing: Float[Array, ""]
     zeta: Float[Array, ""]
     threshold: float
+    backbone: AbstractBackbone = eqx.field(static=True)
     added_masses: bool = eqx.field(static=True)
     n_elements: int = eqx.field(static=True)
     fixed_base: bool = eqx.field(static=True)
@@ -550,6 +557,7 @@ class SpringModel(AbstractModel):
         *,
         added_masses: bool = True,
         cbar=None,
+        backbone: AbstractBackbone | str = DEFAULT_BACKBONE,
         smoothing=DEFAULT_SMOOTHING,
         zeta=0.01,
         n_elements: int = 10,
@@ -566,6 +574,7 @@ class SpringModel(AbstractModel):
         self.column = column
         self.added_masses = bool(added_masses)
         self.cbar = cbar_eq17(block.alpha_r) if cbar is None else jnp.asarray(cbar, dtype=float)
+        self.backbone = as_backbone(backbone)
         self.smoothing = jnp.asarray(smoothing, dtype=float)
         self.zeta = jnp.asarray(zeta, dtype=float)
         self.n_elements = n_elements
@@ -634,6 +643,7 @@ class SpringModel(AbstractModel):
         common = dict(
             fixed_base=self.fixed_base,
             track_energy=track_energy,
+            backbone=self.backbone,
             h=blk.h,
             m=m,
             My=My,
@@ -728,7 +738,7 @@ class SpringModel(AbstractModel):
             over_fn = lambda t, y, args, **kw: jnp.asarray(1.0)  # never overturns
         else:
             over_fn = lambda t, y, args, **kw: thr - jnp.abs(y[0])
-        theta_up = UPLIFT_FACTOR * mech.theta_s
+        theta_up = mech.theta_up
 
         if save is not None:
             t_final = save.ts[-1] if t1 is None else t1
@@ -888,4 +898,5 @@ __all__ = [
     "first_period_eq21",
     "pushover_eq9",
     "DEFAULT_SMOOTHING",
+    "DEFAULT_BACKBONE",
 ]

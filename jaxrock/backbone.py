@@ -1,0 +1,126 @@
+"""Backbones of the base spring: its moment–rotation curve M(θ) (paper section 3, Figure 2 right).
+
+The paper's spring is nonlinear *elastic* and rigid-plastic: M = My sign θ once the column
+rocks, unloading along the loading path. A computable spring needs a finite pre-yield stiffness;
+each backbone here has one parameter, the pre-yield rotation ``θs = smoothing · α′``
+(`SpringModel.smoothing`), and tends to the rigid-plastic envelope as θs → 0:
+
+- `Bilinear` (the paper's OpenSees spring, as ``ElasticMultiLinear``): linear up to
+  the yield rotation θy = θs, then flat at My. Its error against the rigid-plastic limit is of
+  first order in θs with a small constant (the study in `benchmarks/bench_backbone.py`);
+- `Tanh`: ``M = My tanh(θ/θs)``, smooth everywhere; it reaches 99.5 % of My only at 3 θs and
+  converges ~7× more slowly in θs (same study).
+
+A backbone is a small, leafless value: structure, not data (its θs is the model's array leaf).
+Each gives the moment, its potential (the forces are its gradient) and the exact solution of the
+scalar spring equation of an implicit step, ``u + k m(u) = r`` in ``u = θ/θs`` with
+``m = M/My`` and ``k ≥ 0`` (`jaxrock.generalized_alpha`): closed form for the bilinear backbone,
+so its kink never enters a Newton iteration; monotone Newton for tanh.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ._validate import JaxrockInputError
+
+_U_RTOL = 1e-10  # tanh's scalar solve: Newton stops at |Δu| ≤ 1e-10 (|u| + 1)
+
+
+class AbstractBackbone(eqx.Module):
+    """M(θ) = My m(θ/θs) with an odd, increasing unit curve m(u) → sign u as |u| → ∞."""
+
+    name: ClassVar[str]
+    # the spring has (all but) yielded once |θ| > band·θs: the uplift rotation and the pre-yield
+    # band whose crossing generalized-α resolves
+    band: ClassVar[float]
+
+    def unit_moment(self, u):
+        """m(u) = M/My at u = θ/θs."""
+        raise NotImplementedError
+
+    def unit_potential(self, u):
+        """∫₀ᵘ m: the potential is My θs × this."""
+        raise NotImplementedError
+
+    def solve(self, r, k):
+        """u with u + k m(u) = r (k ≥ 0): exact to round-off."""
+        raise NotImplementedError
+
+    def moment(self, theta, My, theta_s):
+        return My * self.unit_moment(theta / theta_s)
+
+    def potential(self, theta, My, theta_s):
+        return My * theta_s * self.unit_potential(theta / theta_s)
+
+
+class Bilinear(AbstractBackbone):
+    """Linear to the yield rotation θy = θs, flat at My beyond: m(u) = clip(u, −1, 1)."""
+
+    name: ClassVar[str] = "bilinear"
+    band: ClassVar[float] = 1.0
+
+    def unit_moment(self, u):
+        return jnp.clip(u, -1.0, 1.0)
+
+    def unit_potential(self, u):
+        a = jnp.abs(u)
+        return jnp.where(a <= 1.0, 0.5 * u * u, a - 0.5)
+
+    def solve(self, r, k):
+        # pre-yield: u (1 + k) = r while |u| ≤ 1, i.e. |r| ≤ 1 + k; yielded: u + k sign u = r
+        return jnp.where(jnp.abs(r) <= 1.0 + k, r / (1.0 + k), r - k * jnp.sign(r))
+
+
+class Tanh(AbstractBackbone):
+    """m(u) = tanh u, potential log cosh u (smooth; 99.5 % of My at 3 θs)."""
+
+    name: ClassVar[str] = "tanh"
+    band: ClassVar[float] = 3.0
+
+    def unit_moment(self, u):
+        return jnp.tanh(u)
+
+    def unit_potential(self, u):
+        a = jnp.abs(u)
+        return a + jnp.log1p(jnp.exp(-2 * a)) - math.log(2.0)
+
+    def solve(self, r, k):
+        """f(u) = u + k tanh u − |r| is increasing and concave for u ≥ 0 (odd: solved for |r|), so
+        Newton from any point left of the root climbs to it monotonically; both |r| − k and
+        |r|/(1 + k) lie left of it (f ≤ 0 there), and the larger is the start."""
+        ra = jnp.abs(r)
+        u = jnp.maximum(ra - k, ra / (1 + k))
+
+        def cond(c):
+            u, du, i = c
+            return (du > _U_RTOL * (u + 1.0)) & (i < 60)
+
+        def body(c):
+            u, _, i = c
+            th = jnp.tanh(u)
+            step = (ra - u - k * th) / (1 + k * (1 - th * th))
+            return u + step, jnp.abs(step), i + 1
+
+        u, *_ = jax.lax.while_loop(cond, body, (u, jnp.asarray(jnp.inf, u.dtype), 0))
+        return jnp.sign(r) * u
+
+
+BACKBONES = {b.name: b for b in (Bilinear, Tanh)}
+
+
+def as_backbone(backbone: "AbstractBackbone | str") -> AbstractBackbone:
+    """A backbone value from itself or its name."""
+    if isinstance(backbone, AbstractBackbone):
+        return backbone
+    if isinstance(backbone, str) and backbone in BACKBONES:
+        return BACKBONES[backbone]()
+    raise JaxrockInputError(f"backbone = {backbone!r}; valid: {tuple(BACKBONES)} or a jaxrock backbone value")
+
+
+__all__ = ["AbstractBackbone", "Bilinear", "Tanh", "BACKBONES", "as_backbone"]
