@@ -60,7 +60,7 @@ __all__ += ["read_scenes", "run_scenes"]
 from .generalized_alpha import GeneralizedAlpha
 from .backbone import AbstractBackbone, Bilinear, Tanh
 from .spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17, first_period_eq21, pushover_eq9
-from .calibration import CalibrationResult, calibrate_cbar, calibration_report, energy_ratio, fit_power_law, rm_target
+from .calibration import CalibrationResult, calibrate_cbar, calibration_report, energy_ratio, energy_ratio_grid, fit_power_law, rm_target
 
 __all__ += [
     "SpringModel",
@@ -76,6 +76,7 @@ __all__ += [
     "first_period_eq21",
     "pushover_eq9",
     "energy_ratio",
+    "energy_ratio_grid",
     "calibrate_cbar",
     "CalibrationResult",
     "fit_power_law",

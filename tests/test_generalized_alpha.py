@@ -308,7 +308,7 @@ def test_fixed_base_resonant_pulse_matches_kvaerno5():
     displacement 2h α′ = 5 m, 60× the 8 cm drift: peaks 0.66 %, histories 1.5 %.) Kvaerno5 1e-6 vs
     1e-8: 3e-6. Bounds 0.2 % (peaks) and 0.5 % (histories)."""
     blk = FLEX_BLOCK
-    T1 = float(first_period_eq21(blk.h, blk.tan_alpha, 30e9, 2500.0))
+    T1 = float(first_period_eq21(blk.height, blk.tan_alpha, 30e9, 2500.0))
     ex = RickerPulse(G * float(blk.tan_alpha), 2 * math.pi / T1)
     s, H = _fixed_base_run(ex, None)
     _, R = _fixed_base_run(ex, KV6)
