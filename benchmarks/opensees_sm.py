@@ -7,11 +7,12 @@ Model (ndm = 2, ndf = 3), SI units, unit out-of-plane thickness, conventions of 
 - node 1 at (0, 0) fully fixed; node 2 at (0, 0) with both translations fixed, rotation free (the
   base rotation θ). A `zeroLength` element 1–2 carries, in direction 3 (rotation), two materials in
   parallel:
-  * the spring `ElasticMultiLinear`: the nonlinear-elastic backbone M = My tanh(θ/θs),
-    My = m g b′, θs = smoothing·α′, sampled symmetric about 0 (0, steps of 0.05 θs up to 4 θs,
-    then 4.5, 5, 6, 8 θs, then flat at ±My out to ±π/2 — it loads and unloads along
-    the same path, as jaxrock's); the largest deviation from tanh between samples,
-    `backbone_error()`, is 2.4e-4 My;
+  * the spring `ElasticMultiLinear`: the nonlinear-elastic backbone, as jaxrock's (`backbone`):
+    bilinear (the paper's: linear to θy = smoothing·α′, then flat at My = m g b′ out
+    to ±π/2; exact in ElasticMultiLinear), or (the default) M = My tanh(θ/θs) sampled symmetric about 0 (0,
+    steps of 0.05 θs up to 4 θs, then 4.5, 5, 6, 8 θs, then flat at ±My out to ±π/2; largest
+    deviation from tanh between samples, `backbone_error()`, 2.4e-4 My); both load and unload
+    along the same path, as jaxrock's;
   * the damper `Viscous` (C = c, exponent 1), c = c̄ m g^0.5 R′^1.5, c̄ = 0.02 (α′/0.1)² (eq. 17).
 - the column: nodes 2 … n+2 up to 2h, `elasticBeamColumn` elements with `geomTransf Corotational`,
   A = 2b, I = (2b)³/12, E, mass per length ρA as the element's *consistent* mass (`-cMass`), which,
@@ -53,6 +54,7 @@ import openseespy.opensees as ops
 
 G = 9.81
 DEFAULT_SMOOTHING = 1e-4  # θs/α′, jaxrock.spring.DEFAULT_SMOOTHING
+DEFAULT_BACKBONE = "tanh"  # jaxrock.spring.DEFAULT_BACKBONE
 X_PULSE = 8.0  # pulse window ω_p t ∈ [−X, X]
 _X_PEAK = math.sqrt(9 - math.sqrt(54))  # where the antisymmetric shape of eq. 29 peaks
 ANTI_BETA = abs((_X_PEAK**2 / 3 - 3) * (_X_PEAK / math.sqrt(3)) * math.exp(-(_X_PEAK**2) / 6))  # β ≈ 1.38011905
@@ -65,6 +67,7 @@ class Scene:
     """Geometry and derived constants of a SM scene (full height `height`, width `width`)."""
 
     def __init__(self, height, width, *, E=None, rho=2500.0, n_elements=10, smoothing=DEFAULT_SMOOTHING,
+                 backbone=DEFAULT_BACKBONE,
                  cbar=None, zeta=0.01, added_masses=True, base_width=None):
         self.h = 0.5 * height
         self.b = 0.5 * width
@@ -83,19 +86,27 @@ class Scene:
         self.p = math.sqrt(G * self.Rr * self.m / self.Itot)
         self.My = self.m * G * self.bb
         self.theta_s = smoothing * self.alpha
+        self.backbone = backbone
         self.cbar = 0.02 * (self.alpha / 0.1) ** 2 if cbar is None else cbar
         self.c = self.cbar * self.m * math.sqrt(G) * self.Rr**1.5
         self.zeta = zeta
 
     def rigid_energy(self, th, om):
         x = abs(th) / self.theta_s
-        logcosh = x + math.log1p(math.exp(-2 * x)) - math.log(2.0)
-        return 0.5 * self.Itot * om**2 + self.My * self.theta_s * logcosh - self.m * G * self.h * (1 - math.cos(th))
+        if self.backbone == "bilinear":
+            spring = 0.5 * x * x if x <= 1 else x - 0.5
+        else:
+            spring = x + math.log1p(math.exp(-2 * x)) - math.log(2.0)
+        return 0.5 * self.Itot * om**2 + self.My * self.theta_s * spring - self.m * G * self.h * (1 - math.cos(th))
 
 
-def backbone_points(My, theta_s, theta_max=math.pi / 2):
-    """Samples (θ, M) of My tanh(θ/θs), symmetric about 0: uniform steps 0.05 θs up to 4 θs (where
-    the curvature is), then 4.5, 5, 6, 8 θs, then flat out to `theta_max`."""
+def backbone_points(My, theta_s, theta_max=math.pi / 2, backbone="tanh"):
+    """Points (θ, M) of the backbone, symmetric about 0. Bilinear: exact, (θy, My) then flat out to
+    `theta_max`. Tanh: samples of My tanh(θ/θs), uniform steps 0.05 θs up to 4 θs (where the
+    curvature is), then 4.5, 5, 6, 8 θs, then flat out to `theta_max`."""
+    if backbone == "bilinear":
+        th, M = np.array([theta_s, max(theta_max, 10 * theta_s)]), np.array([My, My])
+        return np.concatenate([-th[::-1], [0.0], th]), np.concatenate([-M[::-1], [0.0], M])
     x = np.concatenate([np.linspace(0.0, 4.0, 81)[1:], [4.5, 5.0, 6.0, 8.0]])
     th = np.concatenate([x * theta_s, [max(theta_max, 10 * theta_s)]])
     M = np.concatenate([My * np.tanh(x), [My * math.tanh(8.0)]])
@@ -149,7 +160,7 @@ def build(sc: Scene, *, fixed_base=False, gravity=True, rayleigh=True):
         ops.node(nd, 0.0, k * le)
     ops.fix(2, 1, 1, 1 if fixed_base else 0)
     # base spring + damper
-    th, M = backbone_points(sc.My, sc.theta_s)
+    th, M = backbone_points(sc.My, sc.theta_s, backbone=sc.backbone)
     ops.uniaxialMaterial("ElasticMultiLinear", 1, 0.0, "-strain", *th.tolist(), "-stress", *M.tolist())
     ops.uniaxialMaterial("Viscous", 2, sc.c, 1.0)
     if not fixed_base:
