@@ -136,7 +136,7 @@ def study(name, scenes, flexible, error_integrator, default_integrator):
                 line += f" {ed.max():16.2e}/{np.median(ed):.2e}"
             out(line)
             rows.append((backbone, s, e.max(), i_max, np.flatnonzero(flip), th))
-    out(f"unsettled scenes (own error of the sharp limit): " + "; ".join(f"{own[i]:.1e} at {describe(scenes, i)}" for i in np.flatnonzero(~settled)))
+    out("unsettled scenes (own error of the sharp limit): " + "; ".join(f"{own[i]:.1e} at {describe(scenes, i)}" for i in np.flatnonzero(~settled)))
     out("largest error (same verdict) per setting, and the scenes whose verdict changes:")
     for backbone, s, emax, i_max, flips, th in rows:
         out(f"  {backbone:8s} {s:7.0e}: {emax:.2e} at {describe(scenes, i_max)}")

@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrock import G, Block, Column, GeneralizedAlpha, RickerPulse, RigidModel, SpringIntegrator, SpringModel, Status, simulate
+from jaxrock import G, AntisymmetricRickerPulse, Block, Column, GeneralizedAlpha, RickerPulse, RigidModel, SpringIntegrator, SpringModel, Status, simulate
 from jaxrock._validate import JaxrockInputError
 from jaxrock.backbone import Bilinear, Tanh, as_backbone
 
@@ -136,3 +136,17 @@ def test_flexible_quasi_rigid_column_on_the_kink_matches_the_one_dof_model():
     ref = simulate(SpringModel(BLOCK, backbone="bilinear", smoothing=1e-5), ex, integrator=TSIT5)
     assert s.status == Status.ok and ref.status == Status.ok
     assert float(s.max_theta) == pytest.approx(float(ref.max_theta), abs=1e-3)
+
+
+def test_what_the_default_leaves_on_the_studys_worst_scene():
+    """benchmarks/bench_backbone.py's worst quasi-rigid scene for the default tanh at θs = 1e-4 α
+    (2h = 5.4 m, tanα = 0.182, ω_p/p = 3.70, a_p/(g tanα) = 4.05, antisymmetric): the default is
+    4.8e-2 from the sharp limit (bilinear, θy = 1e-6 α), as the README states; the bilinear
+    backbone at θy = 1e-5 α, recommended there for values, is within the 2e-3 target (measured
+    7.5e-4: this scene also carries the study's largest settled bilinear error, 7.6e-4)."""
+    blk = Block.from_slenderness(5.37, 0.182)
+    ex = AntisymmetricRickerPulse(4.05 * G * 0.182, 3.70 * float(blk.p_r))
+    run = lambda **kw: float(simulate(SpringModel(blk, **kw), ex, integrator=TSIT5).max_theta)
+    sharp = run(backbone="bilinear", smoothing=1e-6)
+    assert abs(run() - sharp) > 2e-2
+    assert abs(run(backbone="bilinear", smoothing=1e-5) - sharp) < 2e-3
