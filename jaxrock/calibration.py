@@ -55,7 +55,7 @@ from . import interrupt
 from ._validate import JaxrockInputError, check_range
 from .excitation import StillGround
 from .geometry import Block
-from .spring import DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17
+from .spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17
 
 #: θ₀/α of the calibration (the paper: "for θ₀/α > 0.5"); 6 angles in [0.5, 0.95].
 CALIBRATION_ANGLES: tuple[float, ...] = (0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
@@ -192,14 +192,17 @@ class SpringFamily(eqx.Module):
 
     Everything else is fixed: `height` (2h [m]; r_eq² of the quasi-rigid SM is size independent),
     `added_masses`, `tan_alpha_base` (None: plain block; else a fixed extended base tanα′, whose
-    η′ is then the target), `column` (None: quasi-rigid one-DOF SM; or a `Column`), `smoothing`
-    (θs/α′), `zeta`, `n_elements`. Hashable by value, so compiled calibrations are reused.
+    η′ is then the target), `column` (None: quasi-rigid one-DOF SM; or a `Column`), `backbone`
+    (the spring's, `jaxrock.backbone`; the smooth tanh by default: gradients through the bilinear
+    kink are not reliable, see `jaxrock.spring.DEFAULT_SMOOTHING`), `smoothing` (θs/α′), `zeta`,
+    `n_elements`. Hashable by value, so compiled calibrations are reused.
     """
 
     height: float = 10.0
     added_masses: bool = eqx.field(static=True, default=True)
     tan_alpha_base: float | None = None
     column: Column | None = None
+    backbone: str = eqx.field(static=True, default=DEFAULT_BACKBONE)
     smoothing: float = DEFAULT_SMOOTHING
     zeta: float = 0.01
     n_elements: int = eqx.field(static=True, default=10)
@@ -213,6 +216,7 @@ class SpringFamily(eqx.Module):
             self.column,
             added_masses=self.added_masses,
             cbar=cbar,
+            backbone=self.backbone,
             smoothing=self.smoothing,
             zeta=self.zeta,
             n_elements=self.n_elements,

@@ -76,8 +76,8 @@ from .results import Solution, Status
 # bilinear backbone at θy = 1e-5 α (`backbone="bilinear", smoothing=1e-5`) is within 8.3e-4
 # wherever the limit is settled, for 15 % more cost: use it for values. It stays off by default
 # because its kink breaks derivatives through the adaptive steps: with it, calibration's reverse
-# ∂r_eq²/∂c̄ came out −1.40 against finite differences' −1.99, and generalized-α's jacfwd in a_p was
-# 35 % (median) from Tsit5's on 64 random scenes (tanh: within 2 %).
+# ∂r_eq²/∂c̄ (Tsit5 1e-10) came out −1.40 or −3.43 against finite differences' −1.988, and
+# generalized-α's jacfwd in a_p was 35 % (median) from Tsit5's on 64 random scenes (tanh: 2 %).
 DEFAULT_SMOOTHING = 1e-4
 DEFAULT_BACKBONE = "tanh"
 QUASI_RIGID_RHO = 2500.0  # kg/m³: mass of the quasi-rigid scene (results do not depend on it)
