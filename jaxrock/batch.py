@@ -203,18 +203,20 @@ def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
     return cache[path]
 
 
-def scene_model(kind: str, block: Block, *, eta=None, cbar=None, E=None, rho=None, zeta=None):
+def scene_model(kind: str, block: Block, *, eta=None, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None):
     """The model of one scene (`kind` in `MODELS`; None means the default): shared by the batch
     rows and the CLI. A rigid model always carries its η as an array (the block's η′ by default),
     so that rows with and without `eta` share one batch."""
     if kind == "rigid":
         return RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
-    from .spring import Column, SpringModel
+    from .spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringModel
 
+    spring = dict(cbar=cbar, backbone=DEFAULT_BACKBONE if backbone is None else backbone,
+                  smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
     if kind == "spring":
-        return SpringModel(block, None, cbar=cbar)
+        return SpringModel(block, None, **spring)
     column = Column(DEFAULT_E if E is None else E, DEFAULT_RHO if rho is None else rho)
-    return SpringModel(block, column, cbar=cbar, zeta=DEFAULT_ZETA if zeta is None else zeta)
+    return SpringModel(block, column, zeta=DEFAULT_ZETA if zeta is None else zeta, **spring)
 
 
 DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA = 30e9, 2500.0, 0.01  # concrete (paper sections 4–6)

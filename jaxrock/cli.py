@@ -88,6 +88,11 @@ class ModelKind(str, Enum):
     spring_flexible = "spring-flexible"
 
 
+class BackboneKind(str, Enum):
+    tanh = "tanh"
+    bilinear = "bilinear"
+
+
 class PulseKind(str, Enum):
     symmetric = "symmetric"
     antisymmetric = "antisymmetric"
@@ -244,7 +249,7 @@ def parse_values(name: str, text: str) -> np.ndarray:
 
 
 def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alpha_base=None, *, undamped=False,
-                eta=None, cbar=None, E=None, rho=None, zeta=None):
+                eta=None, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None):
     """The model of a CLI scene: the flags are checked here, the model is built by
     `batch.scene_model` (the same as a batch row)."""
     from ._validate import JaxrockInputError
@@ -258,6 +263,9 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
             if v is not None:
                 raise JaxrockInputError(f"{name} applies to --model spring-flexible only (the column's material)")
     if kind is ModelKind.rigid:
+        for name, v in (("--backbone", backbone), ("--smoothing", smoothing)):
+            if v is not None:
+                raise JaxrockInputError(f"{name} applies to the spring models only (the base spring)")
         if cbar is not None:
             raise JaxrockInputError("--cbar applies to the spring models only (rigid: --eta or --undamped)")
         if undamped and eta is not None:
@@ -267,7 +275,9 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
         raise JaxrockInputError("--eta applies to the rigid model only (spring: --cbar or --undamped)")
     if undamped and cbar is not None:
         raise JaxrockInputError("give --undamped or --cbar, not both")
-    return scene_model(kind.value, block, cbar=0.0 if undamped else cbar, E=E, rho=rho, zeta=zeta)
+    backbone = None if backbone is None else BackboneKind(backbone).value
+    return scene_model(kind.value, block, cbar=0.0 if undamped else cbar, E=E, rho=rho, zeta=zeta, backbone=backbone,
+                       smoothing=smoothing)
 
 
 def _integrator(model: ModelKind, tol: Optional[float]):
@@ -498,6 +508,9 @@ def simulate(
     E: Optional[float] = typer.Option(None, "--E", help="spring-flexible: Young's modulus [Pa] (default 30e9)"),
     rho: Optional[float] = typer.Option(None, help="spring-flexible: density [kg/m³] (default 2500)"),
     zeta: Optional[float] = typer.Option(None, help="spring-flexible: column damping ratio (default 0.01)"),
+    backbone: Optional[BackboneKind] = typer.Option(None, help="spring: base-spring backbone (default tanh; bilinear with "
+                                                    "--smoothing 1e-5 is within 1e-3 of the sharp limit, README)"),
+    smoothing: Optional[float] = typer.Option(None, help="spring: pre-yield rotation θs/α′ in (0, 1) (default 1e-4)"),
     tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
     plot: Optional[Path] = typer.Option(None, help="write a time-history plot (PNG) here"),
     t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
@@ -507,7 +520,8 @@ def simulate(
     from .plotting import plot_history
     from .results import Save
 
-    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta)
+    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta,
+                    backbone=backbone, smoothing=smoothing)
     exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio, units)
     integ = _integrator(model, tol)
     if plot is None:

@@ -65,6 +65,18 @@ def test_spectrum_tol_runs_generalized_alpha(tmp_path):
     np.testing.assert_array_equal(spec.overturned, ref.overturned)
 
 
+def test_simulate_spring_backbone_options_are_the_models():
+    """--backbone/--smoothing build the same SpringModel as Python (the bilinear spring at θy = 1e-5 α,
+    the README's choice for values)."""
+    r = invoke("simulate", "--model", "spring", "--height", 10, "--tan-alpha", 0.2, "--accel-ratio", 4,
+               "--omega-p", 2 * math.pi, "--backbone", "bilinear", "--smoothing", 1e-5)
+    assert r.exit_code == 0, r.output
+    block = jr.Block.from_slenderness(10.0, 0.2)
+    model = jr.SpringModel(block, backbone="bilinear", smoothing=1e-5)
+    sol = _jit_sim(model, jr.RickerPulse(4 * float(block.uplift_acceleration), 2 * math.pi))
+    assert _printed_max(r.output) == pytest.approx(float(sol.max_theta), abs=2e-6)
+
+
 @pytest.mark.parametrize(
     "args, name",
     [
@@ -149,6 +161,18 @@ def test_simulate_prints_max_theta_of_simulate(tmp_path):
     assert png.stat().st_size > 1000
 
 
+def test_simulate_spring_backbone_options_are_the_models():
+    """--backbone/--smoothing build the same SpringModel as Python (the bilinear spring at θy = 1e-5 α,
+    the README's choice for values)."""
+    r = invoke("simulate", "--model", "spring", "--height", 10, "--tan-alpha", 0.2, "--accel-ratio", 4,
+               "--omega-p", 2 * math.pi, "--backbone", "bilinear", "--smoothing", 1e-5)
+    assert r.exit_code == 0, r.output
+    block = jr.Block.from_slenderness(10.0, 0.2)
+    model = jr.SpringModel(block, backbone="bilinear", smoothing=1e-5)
+    sol = _jit_sim(model, jr.RickerPulse(4 * float(block.uplift_acceleration), 2 * math.pi))
+    assert _printed_max(r.output) == pytest.approx(float(sol.max_theta), abs=2e-6)
+
+
 @pytest.mark.parametrize(
     "args, name",
     [
@@ -158,6 +182,9 @@ def test_simulate_prints_max_theta_of_simulate(tmp_path):
         (["--omega-p", -1], "omega_p"),
         (["--record", "no/such/file.AT2"], "--record"),
         (["--eta", 0.5, "--model", "spring"], "--eta"),
+        (["--backbone", "bilinear"], "--backbone"),
+        (["--model", "spring", "--smoothing", 0], "smoothing"),
+        (["--model", "spring", "--backbone", "multilinear"], "backbone"),
     ],
 )
 def test_simulate_bad_input_exits_2(args, name):
