@@ -24,13 +24,13 @@ Newton on q₁ with three structural shortcuts, each exact or converging to the 
 - step sizes come from a ladder dt_k = dt_top / 2^k (k < `levels`), whose tangent inverses are
   computed once per run; steps double only on their own grid, so records' sample times are hit.
 
-Steps through the spring's pre-yield band (|θ| < 3 θs for tanh, θy for the bilinear backbone,
-where the moment turns from −My to My and the acceleration jumps by ~2 My/I) move θ by at most `crossing` θs. The displacement error
-estimate below allows a step of ~(tol/Δa)^½ there, which jumps the band in one or two steps; the
-impact's velocity change then depends on where the band falls on the step grid, which slides as
-the parameters move. The values carry a fast wiggle and `jacfwd`, the exact derivative of the
-discrete map, is its slope: on 64 random one-DOF scenes at 1e-6 its median error against Tsit5's
-reverse gradient was 250 % without the limit and 0.5 % with `crossing` = 1
+Steps through the spring's pre-yield band (|θ| < 3 θs for tanh, θy for the bilinear backbone, where
+the moment turns from −My to My and the acceleration jumps by ~2 My/I) move θ by at most `crossing`
+θs. The displacement error estimate below allows a step of ~(tol/Δa)^½ there, which jumps the band
+in one or two steps; the impact's velocity change then depends on where the band falls on the step
+grid, which slides as the parameters move. The values carry a fast wiggle and `jacfwd`, the exact
+derivative of the discrete map, is its slope: on 64 random one-DOF scenes at 1e-6 its median error
+against Tsit5's reverse gradient was 250 % without the limit and 0.5 % with `crossing` = 1
 (`benchmarks/bench_gradients.py --part bias`; choice of the value there).
 
 The local error is Zienkiewicz & Xie's estimate ``dt² (β − 1/6)(a₁ − a₀)`` in a max norm,
@@ -103,7 +103,8 @@ class GeneralizedAlpha(AbstractIntegrator):
         the rigid potential at the peak so far, when `settle_margin` is given).
 
         Returns a dict: peak (max |θ|, from each step's cubic Hermite interpolant), overturned,
-        t_overturn, t_up (first |θ| beyond the pre-yield band), status, steps (attempted), history (at `save_ts`)."""
+        t_overturn, t_up (first |θ| beyond the pre-yield band), status, steps (attempted), history
+        (at `save_ts`)."""
         c0, cond, body, result = self.machinery(mech, excitation, t_stop, thr=thr, settle_margin=settle_margin, save_ts=save_ts, fields=fields)
         return result(jax.lax.while_loop(cond, body, c0))
 

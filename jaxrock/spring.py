@@ -13,8 +13,8 @@ rigid-plastic in the limit, yield moment ``My = m g R′ sinα′ = m g b′`` (
 block), with a finite pre-yield rotation ``θs = smoothing · α′`` (stiffness ``My/θs``): the
 bilinear backbone, linear to θy = θs then flat at My (the paper's), or ``M = My tanh(θ/θs)``
 (`jaxrock.backbone`; the potential is the backbone's integral). Damper in parallel:
-``c = c̄ m g^0.5 R′^1.5`` (eqs. 17–18), by default with ``c̄ = 0.02 (α′/0.1)²`` (eq. 17). For an extended base the rocking quantities α′, R′ are used
-in eq. 17/18, because the damper stands for the impact losses at the base's corners, which are
+``c = c̄ m g^0.5 R′^1.5`` (eqs. 17–18), by default with ``c̄ = 0.02 (α′/0.1)²`` (eq. 17). For an
+extended base the rocking quantities α′, R′ are used in eq. 17/18, because the damper stands for the impact losses at the base's corners, which are
 governed by α′ (the paper: "computed using Equation (17)"); give ``cbar`` to override.
 
 Inertia: without added masses ``Itot = (4/3) m h²`` (the column about its base centre, eq. 11);
@@ -681,13 +681,13 @@ class SpringModel(AbstractModel):
         ∇V(q) = (F/m) r with θ prescribed (r: the ground load vector; gravity P-Δ and, for a flexible
         column, its bending included). Quasi-rigid: (M(θ)/(m g h) − sinθ)/cosθ, which is eq. 9,
         tanα/cosθ − tanθ, once the spring has yielded (|θ| beyond its pre-yield band)."""
+        if self.fixed_base:
+            raise JaxrockInputError("pushover: a fixed-base column (fixed_base=True) does not rock")
         theta = jnp.asarray(theta, dtype=float)
         mech = self.mechanics()
         if mech.n is None:
             f = lambda th: jax.grad(mech.potential)(jnp.atleast_1d(th))[0] / (mech.m * G * mech.h * jnp.cos(th))
             return jnp.vectorize(f)(theta)
-        if self.fixed_base:
-            raise JaxrockInputError("pushover: a fixed-base column (fixed_base=True) does not rock")
         r = mech.r * G  # generalized force of a unit lateral acceleration ratio (F/(m g) = 1)
         grad_v = jax.grad(mech.potential)
         scale = jnp.tile(jnp.array([1.0, 1.0, 0.0]), mech.n) * (mech.h - 1.0) + 1.0  # h for translations

@@ -65,18 +65,6 @@ def test_spectrum_tol_runs_generalized_alpha(tmp_path):
     np.testing.assert_array_equal(spec.overturned, ref.overturned)
 
 
-def test_simulate_spring_backbone_options_are_the_models():
-    """--backbone/--smoothing build the same SpringModel as Python (the bilinear spring at θy = 1e-5 α,
-    the README's choice for values)."""
-    r = invoke("simulate", "--model", "spring", "--height", 10, "--tan-alpha", 0.2, "--accel-ratio", 4,
-               "--omega-p", 2 * math.pi, "--backbone", "bilinear", "--smoothing", 1e-5)
-    assert r.exit_code == 0, r.output
-    block = jr.Block.from_slenderness(10.0, 0.2)
-    model = jr.SpringModel(block, backbone="bilinear", smoothing=1e-5)
-    sol = _jit_sim(model, jr.RickerPulse(4 * float(block.uplift_acceleration), 2 * math.pi))
-    assert _printed_max(r.output) == pytest.approx(float(sol.max_theta), abs=2e-6)
-
-
 @pytest.mark.parametrize(
     "args, name",
     [
