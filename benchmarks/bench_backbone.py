@@ -1,6 +1,8 @@
 """The spring's backbone and its pre-yield rotation θs, chosen by a study over many scenes (issue 20).
 
     python benchmarks/bench_backbone.py [--quick] [--n-rigid 192] [--n-flex 48] [--seed 0]
+    python benchmarks/bench_backbone.py --part gradients
+
 
 Scenes (seeded uniform sample, both pulse kinds in equal numbers): tanα ∈ [0.05, 0.35],
 2h ∈ [1, 50] m (log-uniform), ω_p/p′ ∈ [1, 15] (log-uniform), a_p/(g tanα) ∈ [1, 8]; the
@@ -18,7 +20,15 @@ For each backbone (bilinear, tanh) and θs/α ∈ {1e-3 … 3e-6}:
   in the spectra), best of two warm calls; for flexible columns also the default integrator's
   total error (backbone + time steps).
 
-The printed table is also written to benchmarks/results/bench_backbone.txt.
+`--part gradients`: why the bilinear backbone is not the default — derivatives through its kink.
+On 8 seeded quasi-rigid rocking scenes (a_p/(g tanα) 1.2–3, 2h 5–30 m, tanα 0.12–0.3, ω_p/p 2–8),
+d max|θ|/α / d ln a_p by forward mode (generalized-α 1e-6 `jacfwd`; Tsit5 1e-10 forward) against
+central differences (step 1e-3 in ln a_p), and calibration's reverse-mode ∂r_eq²/∂c̄ (Tsit5 1e-10
+and 1e-12; tanα = 0.2, c̄ = 0.08, θ₀ = 0.7 α) against central differences, for tanh at θs = 1e-4 α
+and the bilinear backbone at θy = 1e-5 α.
+
+The printed tables are also written to benchmarks/results/bench_backbone.txt (and
+bench_backbone_gradients.txt).
 """
 
 from __future__ import annotations
@@ -145,13 +155,52 @@ def study(name, scenes, flexible, error_integrator, default_integrator):
     return rows
 
 
+def gradients() -> None:
+    from jaxrock.calibration import SpringFamily, energy_ratio
+
+    out("# bench_backbone --part gradients: derivatives through the backbone, against central differences")
+    rng = np.random.default_rng(11)
+    n = 8
+    scenes = tuple(jnp.asarray(x) for x in (rng.uniform(1.2, 3.0, n), rng.uniform(5, 30, n), rng.uniform(0.12, 0.3, n),
+                                             rng.uniform(2, 8, n)))
+    tsit5_fwd = SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", autodiff="forward")
+    out(f"{'backbone':9s} {'θs/α':>6s} {'integrator':>18s}  d max θ/d ln a_p: median and max relative error")
+    for backbone, s in (("tanh", 1e-4), ("bilinear", 1e-5)):
+        for name, integ in (("generalized-α 1e-6", GeneralizedAlpha(1e-6, 1e-6)), ("Tsit5 1e-10", tsit5_fwd)):
+            def peak(a_r, h2, ta, wr):
+                blk = Block.from_slenderness(h2, ta)
+                ex = RickerPulse(a_r * blk.uplift_acceleration, wr * blk.p_r)
+                return jr.simulate(SpringModel(blk, backbone=backbone, smoothing=s), ex, integrator=integ).max_theta
+
+            d = np.asarray(jax.vmap(jax.jacfwd(peak))(*scenes)) * np.asarray(scenes[0])
+            h = 1e-3
+            f = jax.vmap(peak)
+            fd = (np.asarray(f(scenes[0] * math.exp(h), *scenes[1:])) - np.asarray(f(scenes[0] * math.exp(-h), *scenes[1:]))) / (2 * h)
+            err = np.abs(d - fd) / np.maximum(np.abs(fd), 0.05)
+            out(f"{backbone:9s} {s:6.0e} {name:>18s}  {np.median(err):.2e}  {err.max():.2e}")
+    out(f"{'backbone':9s} {'θs/α':>6s} {'integrator':>18s}  ∂r_eq²/∂c̄ reverse mode, central differences (h = 1e-4)")
+    for backbone, s in (("tanh", 1e-4), ("bilinear", 1e-5)):
+        for tol in (1e-10, 1e-12):
+            integ = SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=200_000)
+            fam = SpringFamily(backbone=backbone, smoothing=s)
+            r2 = lambda c: energy_ratio(fam(0.2, c), 0.7, integrator=integ)
+            g = float(jax.jit(jax.grad(r2))(0.08))
+            fd = float((jax.jit(r2)(0.08 + 1e-4) - jax.jit(r2)(0.08 - 1e-4)) / 2e-4)
+            out(f"{backbone:9s} {s:6.0e} {'Tsit5 ' + format(tol, 'g'):>18s}  {g:.4f}  {fd:.4f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--part", choices=("study", "gradients"), default="study")
     ap.add_argument("--quick", action="store_true", help="a few scenes (smoke run)")
     ap.add_argument("--n-rigid", type=int, default=192, help="quasi-rigid scenes")
     ap.add_argument("--n-flex", type=int, default=48, help="flexible scenes")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
+    if args.part == "gradients":
+        gradients()
+        (HERE / "results" / "bench_backbone_gradients.txt").write_text("\n".join(LINES) + "\n")
+        return
     if args.quick:
         args.n_rigid, args.n_flex = 8, 4
     rng = np.random.default_rng(args.seed)

@@ -75,9 +75,10 @@ from .results import Solution, Status
 # 1.7e-4 and 7.6e-4, the largest on antisymmetric pulses near a_p/(g tanα) ≈ 4, ω_p/p′ ≈ 4. The
 # bilinear backbone at θy = 1e-5 α (`backbone="bilinear", smoothing=1e-5`) is within 8.3e-4
 # wherever the limit is settled, for 15 % more cost: use it for values. It stays off by default
-# because its kink breaks derivatives through the adaptive steps: with it, calibration's reverse
-# ∂r_eq²/∂c̄ (Tsit5 1e-10) came out −1.40 or −3.43 against finite differences' −1.988, and
-# generalized-α's jacfwd in a_p was 35 % (median) from Tsit5's on 64 random scenes (tanh: 2 %).
+# because its kink breaks derivatives through the adaptive steps (`bench_backbone.py --part
+# gradients`): calibration's reverse ∂r_eq²/∂c̄ (Tsit5 1e-10) came out −3.43 against finite
+# differences' −1.988, and d max θ / d ln a_p was 33 % (median) from central differences with
+# generalized-α's jacfwd, 2.7 % with Tsit5's forward mode (tanh: 0.13 % and 3e-6).
 DEFAULT_SMOOTHING = 1e-4
 DEFAULT_BACKBONE = "tanh"
 QUASI_RIGID_RHO = 2500.0  # kg/m³: mass of the quasi-rigid scene (results do not depend on it)
@@ -605,7 +606,7 @@ class SpringModel(AbstractModel):
         with the default tanh backbone at θs = 1e-4 α; with the bilinear θy = 1e-5 α, over the 240
         scenes of `benchmarks/bench_backbone.py`: quasi-rigid Tsit5 5.2 ms/scene; flexible
         generalized-α 1e-5 10 ms/scene, its total error against the sharp limit 3.1e-3 max, 4e-5
-        median, at 3e-6 6.1e-4 max for 1.3× the cost).
+        median).
 
         Quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10 (32×32 pulse grid, tanα = 0.2: max error
         of max|θ|/α 2.4e-8 against Tsit5 at 1e-11, ~1.5–1.9 ms/scene; reverse-mode differentiable,
