@@ -30,7 +30,8 @@ __all__ = [
 ]
 
 from .results import Save, Solution, Status, status_names
-from .model import AbstractIntegrator, AbstractModel, simulate
+from .model import (AbstractIntegrator, AbstractModel, AbstractSpringIntegrator, AbstractStepper, ModelKind, Schedule,
+                    register_model_kind, simulate)
 from .rigid import EventIntegrator, RigidModel
 
 __all__ += [
@@ -40,6 +41,11 @@ __all__ += [
     "status_names",
     "AbstractIntegrator",
     "AbstractModel",
+    "AbstractStepper",
+    "AbstractSpringIntegrator",
+    "Schedule",
+    "ModelKind",
+    "register_model_kind",
     "simulate",
     "EventIntegrator",
     "RigidModel",

@@ -81,9 +81,8 @@ from .excitation import Record
 from .geometry import TAN_ALPHA_MIN, Block
 from .spectra import PULSES, run_batch
 from .results import STATUS_NAMES
-from .rigid import RigidModel
+from .model import MODEL_KINDS
 
-MODELS = ("rigid", "spring", "spring-flexible")
 BUILTIN_RECORDS = ("elcentro",)
 INPUT_COLUMNS = (
     "height",
@@ -108,13 +107,18 @@ INPUT_COLUMNS = (
 PASS_THROUGH = ("id", "name", "label", "group", "note", "notes", "comment")
 PASS_THROUGH_PREFIX = "x_"
 RESULT_COLUMNS = ("max_theta", "overturned", "t_overturn", "uplifted", "t_uplift", "n_impacts", "status")
-_ONLY = {
-    "eta": ("rigid",),
-    "cbar": ("spring", "spring-flexible"),
-    "e": ("spring-flexible",),
-    "rho": ("spring-flexible",),
-    "zeta": ("spring-flexible",),
-}
+MODEL_PARAMETERS = ("eta", "cbar", "E", "rho", "zeta")  # model parameter columns (lower-cased in files)
+
+
+def models() -> tuple[str, ...]:
+    """The model kinds a scenes file may name (`jaxrock.model.MODEL_KINDS`: the built-in rigid,
+    spring and spring-flexible, and any kind registered since)."""
+    return tuple(MODEL_KINDS)
+
+
+def _takes(parameter: str) -> tuple[str, ...]:
+    """The model kinds that take a parameter column."""
+    return tuple(k.name for k in MODEL_KINDS.values() if parameter in k.parameters)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -203,23 +207,18 @@ def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
     return cache[path]
 
 
-def scene_model(kind: str, block: Block, *, eta=None, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None):
-    """The model of one scene (`kind` in `MODELS`; None means the default): shared by the batch
-    rows and the CLI. A rigid model always carries its η as an array (the block's η′ by default),
-    so that rows with and without `eta` share one batch."""
-    if kind == "rigid":
-        return RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
-    from .spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringModel
-
-    spring = dict(cbar=cbar, backbone=DEFAULT_BACKBONE if backbone is None else backbone,
-                  smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
-    if kind == "spring":
-        return SpringModel(block, None, **spring)
-    column = Column(DEFAULT_E if E is None else E, DEFAULT_RHO if rho is None else rho)
-    return SpringModel(block, column, zeta=DEFAULT_ZETA if zeta is None else zeta, **spring)
-
-
-DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA = 30e9, 2500.0, 0.01  # concrete (paper sections 4–6)
+def scene_model(kind: str, block: Block, **parameters):
+    """The model of one scene of model kind `kind` (`models()`), built by its registered builder
+    (`jaxrock.model.ModelKind`) from `block` and the given `parameters` (None: the default):
+    shared by the batch rows and the CLI. Refuses a parameter the kind does not take."""
+    if kind not in MODEL_KINDS:
+        raise JaxrockInputError(f"model = {kind!r}; valid: {', '.join(models())}")
+    entry = MODEL_KINDS[kind]
+    given = {k: v for k, v in parameters.items() if v is not None}
+    extra = sorted(set(given) - set(entry.parameters))
+    if extra:
+        raise JaxrockInputError(f"{', '.join(extra)}: not a parameter of model {kind} (it takes {', '.join(entry.parameters) or 'none'})")
+    return entry.build(block, **given)
 
 
 def _invalid_lanes(stacked) -> np.ndarray:
@@ -246,8 +245,8 @@ class Scenes:
         """The stacked models of rows `idx` (all of model kind `kind`)."""
         p = {k: jnp.asarray(v[idx]) for k, v in self.params.items()}
         block = jax.vmap(Block.from_slenderness)(p["height"], p["tan_alpha"], p["tan_alpha_base"])
-        return jax.vmap(lambda b, eta, cbar, E, rho, zeta: scene_model(kind, b, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta))(
-            block, p["eta"], p["cbar"], p["E"], p["rho"], p["zeta"])
+        takes = {k: p[k] for k in MODEL_KINDS[kind].parameters if k in MODEL_PARAMETERS}
+        return jax.vmap(lambda b, kw: scene_model(kind, b, **kw))(block, takes)
 
     def excitation(self, exc: str, idx) -> object:
         """The stacked excitations of rows `idx` (all of excitation kind `exc`)."""
@@ -259,9 +258,10 @@ class Scenes:
 def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     everyone = np.ones(t.n, bool)
     kind = np.char.lower(t.text("model", "rigid").astype(str))
-    t.fail(~np.isin(kind, MODELS), "model", lambda i: f"{t.cells['model'][i]!r}; valid: {', '.join(MODELS)}")
-    for col, models in _ONLY.items():
-        t.fail(t.has(col) & ~np.isin(kind, models), col, lambda i: f"applies only to model {' / '.join(models)}, not {kind[i]}")
+    t.fail(~np.isin(kind, models()), "model", lambda i: f"{t.cells['model'][i]!r}; valid: {', '.join(models())}")
+    for name in MODEL_PARAMETERS:
+        col, kinds = name.lower(), _takes(name)
+        t.fail(t.has(col) & ~np.isin(kind, kinds), col, lambda i: f"applies only to model {' / '.join(kinds)}, not {kind[i]}")
 
     height = t.num("height", 0.0, math.inf, lo_open=True, hi_open=True)
     t.fail(np.isnan(height), "height", "missing: the full height 2h [m] (> 0) is required")
@@ -284,7 +284,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     E = t.num("e", 0.0, math.inf, lo_open=True, hi_open=True)
     rho = t.num("rho", 0.0, math.inf, lo_open=True, hi_open=True)
     zeta = t.num("zeta", 0.0, math.inf, hi_open=True)
-    from .spring import Column, cbar_eq17
+    from .spring import DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA, Column, cbar_eq17
 
     params = {
         "height": height, "tan_alpha": tan_a, "tan_alpha_base": tan_b,
@@ -293,7 +293,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
         "E": np.where(np.isnan(E), DEFAULT_E, E), "rho": np.where(np.isnan(rho), DEFAULT_RHO, rho),
         "zeta": np.where(np.isnan(zeta), DEFAULT_ZETA, zeta),
     }
-    flexible = kind == "spring-flexible"
+    flexible = np.isin(kind, _takes("E"))  # rows whose column's material is checked
     columns = jax.vmap(Column)(jnp.asarray(params["E"]), jnp.asarray(params["rho"]))
     t.fail(flexible & _invalid_lanes(columns), None, lambda i: _refusal(lambda: Column(params["E"][i], params["rho"][i])))
 
@@ -610,4 +610,4 @@ def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> Bat
     )
 
 
-__all__ = ["read_scenes", "run_scenes", "run_stacked", "count_results", "Scenes", "BatchReport", "MODELS", "INPUT_COLUMNS", "RESULT_COLUMNS"]
+__all__ = ["read_scenes", "run_scenes", "run_stacked", "count_results", "Scenes", "BatchReport", "models", "scene_model", "INPUT_COLUMNS", "RESULT_COLUMNS"]

@@ -48,11 +48,13 @@ import jax.numpy as jnp
 from . import _linalg
 from ._peaks import hermite_crossing, hermite_peak
 from ._validate import JaxrockInputError
-from .model import AbstractIntegrator
-from .results import Status
+from jaxtyping import Array
+
+from .model import AbstractModel, AbstractSpringIntegrator, AbstractStepper, Schedule
+from .results import Save, Solution, Status
 
 
-class GeneralizedAlpha(AbstractIntegrator):
+class GeneralizedAlpha(AbstractSpringIntegrator):
     """Adaptive generalized-α for `SpringModel` (quasi-rigid or flexible).
 
     - `rtol`, `atol`: local error tolerances (atol scaled per component, see module docstring);
@@ -97,26 +99,75 @@ class GeneralizedAlpha(AbstractIntegrator):
         beta = 0.25 * (1 - am + af) ** 2
         return am, af, gamma, beta
 
-    def integrate(self, mech, excitation, t_stop, *, thr, settle_margin=None, save_ts=None, fields=()):
-        """Integrate from the excitation's start to `t_stop` (or earlier: overturned at
-        |θ| ≥ `thr`; or, after the excitation, settled: mechanical energy below `settle_margin` ×
-        the rigid potential at the peak so far, when `settle_margin` is given).
+    def stepper(self, model, system, save=None, t1=None) -> "GeneralizedAlphaStepper":
+        """`AbstractSpringIntegrator.stepper`: one loop step is one attempted step."""
+        return GeneralizedAlphaStepper(self, model, system, save, t1)
 
-        Returns a dict: peak (max |θ|, from each step's cubic Hermite interpolant), overturned,
-        t_overturn, t_up (first |θ| beyond the pre-yield band), status, steps (attempted), history
-        (at `save_ts`)."""
-        c0, cond, body, result = self.machinery(mech, excitation, t_stop, thr=thr, settle_margin=settle_margin, save_ts=save_ts, fields=fields)
-        return result(jax.lax.while_loop(cond, body, c0))
 
-    def machinery(self, mech, excitation, t_stop, *, thr, settle_margin=None, save_ts=None, fields=()):
-        """(carry0, cond, body, result) of the step loop, for runs advanced in passes
-        (`jaxrock.spring.advance`): the carry is a dict of arrays, `body` one attempted step."""
-        am, af, gamma, beta = self.coefficients
-        K = self.levels
+class GeneralizedAlphaStepper(AbstractStepper):
+    """A spring-model run by generalized-α (`AbstractStepper`): one step is one attempted step of
+    the adaptive scheme (module docstring). The state is a dict of arrays; the ladder's tangent
+    inverses, computed once per scene in `init`, ride in it unchanged.
+
+    Runs from the excitation's start to `SpringModel.run_end` or earlier: overturned at
+    |θ| ≥ threshold·α′; or, for a summary, settled after the excitation (mechanical energy below
+    `system.settle_margin` × the rigid potential at the peak so far). The peak max |θ| comes from
+    each step's cubic Hermite interpolant, the uplift time from the first |θ| beyond the pre-yield
+    band."""
+
+    integrator: GeneralizedAlpha
+    model: AbstractModel  # the SpringModel
+    system: eqx.Module  # its prepared mechanics (`SpringModel.mechanics`)
+    save: Save | None
+    t1: Array | None
+
+    @property
+    def max_steps(self) -> int:
+        return self.integrator.max_steps
+
+    @property
+    def checkpointed(self) -> bool:
+        return False  # forward mode only (`lax.while_loop`)
+
+    @property
+    def schedule(self) -> Schedule:
+        # a quasi-rigid step is cheap and its batch overhead large (below 64 cells gathering stops
+        # paying; 32×32 grid: 0.09 ms/scene vs 0.15 with 8); a flexible step is dear (8). A cell
+        # keeps its ladder of tangent inverses (levels × N² floats).
+        N = self.system.ndof
+        return Schedule(passes=(128, 256, 512, 1024), smallest_batch=64 if N == 1 else 8,
+                        bytes_per_scene=0 if N == 1 else self.integrator.levels * N * N * 8)
+
+    def init(self, exc):
+        return self._loop(exc)[0]()
+
+    def step(self, exc, c):
+        return self._loop(exc)[1](c)
+
+    def done(self, c):
+        return c["done"] | (c["steps"] >= self.max_steps)
+
+    def finish(self, exc, c) -> Solution:
+        out = self._loop(exc)[2](c)
+        return self.model.solution(out["peak"], out["overturned"], out["t_overturn"], out["t_up"], out["status"],
+                                   None if self.save is None else self.save.ts, out["history"], out["steps"])
+
+    def _loop(self, excitation):
+        """(initial, body, result) of the step loop on `excitation`: closures over the scene's
+        constants (cheap: the ladder's tangent inverses are computed in `initial` only)."""
+        ig, mech, model = self.integrator, self.system, self.model
+        thr = model.overturn_rotation
+        t_stop = model.run_end(mech, excitation, self.save, self.t1)
+        settle_margin = mech.settle_margin if self.save is None else None
+        save_ts = None if self.save is None else self.save.ts
+        fields = () if self.save is None else self.save.fields
+        n_ts = 0 if save_ts is None else save_ts.shape[0]
+
+        am, af, gamma, beta = ig.coefficients
+        K = ig.levels
         N = mech.ndof
         dtype = jnp.result_type(float)
         M = mech.mass_matrix()
-        K0, C0 = mech.tangents()
         e0 = jnp.zeros(N).at[0].set(1.0)
         clamp = mech.fixed_base
         free = jnp.ones(N).at[0].set(0.0) if clamp else jnp.ones(N)
@@ -133,20 +184,13 @@ class GeneralizedAlpha(AbstractIntegrator):
         stride = (2 ** (K - 1 - ks)).astype(jnp.int64 if dtype == jnp.float64 else jnp.int32)
         dt_min = dts[-1]
 
-        def k_eff(dt):
-            Kb = (1 - am) / (beta * dt**2) * M + (1 - af) * (gamma / (beta * dt) * C0 + K0)
-            if clamp:
-                Kb = Kb * free[:, None] * free[None, :] + jnp.diag(1.0 - free)
-            return Kb
-
-        Kinv = _linalg.inv(jax.vmap(k_eff)(dts))  # (K, N, N)
         scale = mech.atol_scale()[:N]
         My, theta_s = mech.My, mech.theta_s
         spring = (lambda th: jnp.zeros_like(th)) if clamp else mech.spring_moment
         theta_band = mech.theta_up  # the pre-yield band (tanh: |θ| < 3 θs, 99.5 % of My; bilinear: θy)
 
         def tol_of(q_a, q_b):
-            return self.atol * scale + self.rtol * jnp.maximum(jnp.abs(q_a), jnp.abs(q_b))
+            return ig.atol * scale + ig.rtol * jnp.maximum(jnp.abs(q_a), jnp.abs(q_b))
 
         def solve_theta(rhs, z0):
             """θ with θ + z₀ M(θ) = rhs, i.e. u + k m(u) = r in u = θ/θs (k = z₀ My/θs ≥ 0,
@@ -154,11 +198,41 @@ class GeneralizedAlpha(AbstractIntegrator):
             return mech.backbone.solve(rhs / theta_s, z0 * My / theta_s) * theta_s
 
         track = mech.track_energy
-        y_init = mech.initial_state()  # [q, v] (+ [dissipated, input] when tracked)
-        q0, v0 = y_init[:N], y_init[N : 2 * N]
-        f0_rest, f0_ext, f0_damp = mech.forces_without_spring(t0, q0, v0, excitation)
-        f0_tot = f0_rest - spring(q0[0]) * e0
-        a0 = _linalg.solve(M * free[:, None] * free[None, :] + jnp.diag(1.0 - free), f0_tot * free)
+
+        def initial():
+            """The state at the excitation's start (the ladder's tangent inverses computed once)."""
+            K0, C0 = mech.tangents()
+
+            def k_eff(dt):
+                Kb = (1 - am) / (beta * dt**2) * M + (1 - af) * (gamma / (beta * dt) * C0 + K0)
+                if clamp:
+                    Kb = Kb * free[:, None] * free[None, :] + jnp.diag(1.0 - free)
+                return Kb
+
+            Kinv = _linalg.inv(jax.vmap(k_eff)(dts))  # (K, N, N)
+            y_init = mech.initial_state()  # [q, v] (+ [dissipated, input] when tracked)
+            q0, v0 = y_init[:N], y_init[N : 2 * N]
+            f0_rest, f0_ext, f0_damp = mech.forces_without_spring(t0, q0, v0, excitation)
+            f0_tot = f0_rest - spring(q0[0]) * e0
+            a0 = _linalg.solve(M * free[:, None] * free[None, :] + jnp.diag(1.0 - free), f0_tot * free)
+
+            # carry
+            hist0 = None
+            if save_ts is not None:
+                vals0 = mech.history(t0, y_init, excitation, fields)
+                at0 = save_ts <= t0
+                hist0 = {f: jnp.where(at0, vals0[f], jnp.nan) for f in fields}
+            k_start = jnp.minimum(j_exc + 1, K - 1)
+            carry = dict(
+                n=jnp.zeros((), stride.dtype), k=k_start, t=t0, q=q0, v=v0, a=a0, f=f0_tot,
+                ew=jnp.zeros(2, dtype),  # [dissipated, input] work
+                fd=f0_damp, fe=f0_ext,
+                peak=jnp.abs(q0[0]), t_up=jnp.asarray(jnp.inf, dtype), over=jnp.asarray(False),
+                t_over=jnp.asarray(jnp.inf, dtype), done=jnp.asarray(False), failed=jnp.asarray(False),
+                steps=jnp.zeros((), jnp.int32), hist=hist0, ptr=jnp.sum(save_ts <= t0) if save_ts is not None else jnp.zeros((), jnp.int32),
+                Kinv=Kinv,
+            )
+            return carry
 
         def step(c):
             """One attempted step from the carry's state at level k."""
@@ -183,7 +257,7 @@ class GeneralizedAlpha(AbstractIntegrator):
                 return R * free, (a1, v1, fr, fe, fd)
 
             def ncond(nc):
-                return (~nc[1]) & (nc[2] < self.max_newton)
+                return (~nc[1]) & (nc[2] < ig.max_newton)
 
             def nbody(nc):
                 q1, _, i, _, r_prev = nc
@@ -195,7 +269,7 @@ class GeneralizedAlpha(AbstractIntegrator):
                 r = jnp.max(jnp.abs(dq) / tol_of(q, q1))
                 # converged: increment below newton_tol of the error tolerance, or stalled (at the
                 # round-off floor of a stiff column's forces) while already below the tolerance
-                conv = (r <= self.newton_tol) | ((r <= 1.0) & (r >= 0.5 * r_prev))
+                conv = (r <= ig.newton_tol) | ((r <= 1.0) & (r >= 0.5 * r_prev))
                 conv = conv & jnp.isfinite(r)
                 return q1 + dq, conv, i + 1, aux, r
 
@@ -212,40 +286,19 @@ class GeneralizedAlpha(AbstractIntegrator):
             v1 = vel_of(a1)
             f1_tot = (M @ ((1 - am) * a1 + am * a) - af * f_tot) / (1 - af)
             err = jnp.max(jnp.abs(dt**2 * (beta - 1.0 / 6.0) * (a1 - a)) / tol_of(q, q1))
-            if self.crossing is not None and not clamp:
+            if ig.crossing is not None and not clamp:
                 # a step through the pre-yield band moves θ by at most `crossing` θs; the excess
                 # enters as an error of order 3, so the controller drops ~log2(excess) levels; at
                 # the ladder's bottom it no longer rejects (the band is resolved as far as it goes)
                 th0, th1 = q[0], q1[0]
                 through = (th0 * th1 <= 0) | (jnp.minimum(jnp.abs(th0), jnp.abs(th1)) < theta_band)
                 through = through & (k < K - 1)
-                excess = jnp.where(through, jnp.abs(th1 - th0) / (self.crossing * theta_s), 0.0)
+                excess = jnp.where(through, jnp.abs(th1 - th0) / (ig.crossing * theta_s), 0.0)
                 err = jnp.maximum(err, excess**3)
             err = jnp.where(conv & jnp.isfinite(err), err, jnp.inf)
             return dict(n1=n1, t1=t1, q1=q1, v1=v1, a1=a1 * free, f1=f1_tot, fe1=fe1, fd1=fd1, err=err, dt=dt)
 
-        # carry
-        hist0 = None
-        n_ts = 0
-        if save_ts is not None:
-            n_ts = save_ts.shape[0]
-            vals0 = mech.history(t0, y_init, excitation, fields)
-            at0 = save_ts <= t0
-            hist0 = {f: jnp.where(at0, vals0[f], jnp.nan) for f in fields}
-        k_start = jnp.minimum(j_exc + 1, K - 1)
-        carry = dict(
-            n=jnp.zeros((), stride.dtype), k=k_start, t=t0, q=q0, v=v0, a=a0, f=f0_tot,
-            ew=jnp.zeros(2, dtype),  # [dissipated, input] work
-            fd=f0_damp, fe=f0_ext,
-            peak=jnp.abs(q0[0]), t_up=jnp.asarray(jnp.inf, dtype), over=jnp.asarray(False),
-            t_over=jnp.asarray(jnp.inf, dtype), done=jnp.asarray(False), failed=jnp.asarray(False),
-            steps=jnp.zeros((), jnp.int32), hist=hist0, ptr=jnp.sum(save_ts <= t0) if save_ts is not None else jnp.zeros((), jnp.int32),
-            Kinv=Kinv,
-        )
         theta_up = mech.theta_up
-
-        def cond(c):
-            return (~c["done"]) & (c["steps"] < self.max_steps)
 
         def body(c):
             s = step(c)
@@ -305,7 +358,7 @@ class GeneralizedAlpha(AbstractIntegrator):
                 steps=c["steps"], history=c["hist"],
             )
 
-        return carry, cond, body, result
+        return initial, body, result
 
 
 def _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track):

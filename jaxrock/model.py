@@ -3,16 +3,24 @@
 A model is a value (an `eqx.Module` whose array leaves can be vmapped and differentiated) that
 knows its geometry (`block`), its overturning threshold and its default integrator. The
 integrator settings are a separate value; the output request is a `Save` (or nothing: summary only).
+
+Every entry point drives a model the same way: the model pairs itself with an integrator into an
+`AbstractStepper` (init, step, done, finish; its `Schedule` says how batches advance it), and
+`simulate`, the spectra (`jaxrock.spectra.run_batch`) and the scenes files (`jaxrock.batch`) only
+call those methods. A model kind that scenes files name is registered with `register_model_kind`.
 """
 
 from __future__ import annotations
 
 import abc
+from typing import Callable, NamedTuple
 
 import diffrax
 import equinox as eqx
+import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
+from jaxtyping import Array, Bool, PyTree
 
 from ._validate import JaxrockInputError, Limit, check_one_scene, check_range, is_concrete, within_limits
 from .excitation import AbstractExcitation
@@ -24,7 +32,118 @@ AUTODIFF_MODES = ("reverse", "forward")
 
 
 class AbstractIntegrator(eqx.Module):
-    """Numerical settings of a model's time integration (tolerances, bounds)."""
+    """Numerical settings of a model's time integration (tolerances, bounds): a value, with no
+    behaviour of its own. The model pairs it with a scene's structure into an `AbstractStepper`
+    (`AbstractModel.stepper`), which is what every entry point drives."""
+
+
+class AbstractSpringIntegrator(AbstractIntegrator):
+    """An integrator of the spring model (`jaxrock.spring`): `SpringIntegrator` (diffrax) or
+    `GeneralizedAlpha`. It turns a run into an `AbstractStepper` from
+
+    - `model`: the `SpringModel` — its `overturn_rotation` (threshold·α′; +inf for a fixed base),
+      `run_end(system, excitation, save, t1)` (when the run stops at the latest) and
+      `solution(peak, overturned, t_overturn, t_uplift, status, ts, history, n_iterations)` (the
+      `Solution` from a run's raw summary, |θ| in rad);
+    - `system`: the model's prepared mechanics (`SpringModel.mechanics()`), built once per model:
+      mass matrix, forces (`forces`, `forces_without_spring`), tangents at rest, the backbone's
+      exact scalar solve, tolerance scales, the initial state, energies and history fields;
+    - `save`, `t1`: the output request (None: a summary that stops when the answer is fixed).
+    """
+
+    @abc.abstractmethod
+    def stepper(self, model, system, save: Save | None = None, t1=None) -> "AbstractStepper":
+        """The run of `model` (prepared as `system`) as a stepper."""
+
+
+class Schedule(NamedTuple):
+    """How a batch of scenes is advanced (`jaxrock.spectra.run_batch`).
+
+    - `passes`: loop steps per pass, in order (the last repeats): between passes the scenes still
+      running are gathered into a smaller batch, so that finished ones stop costing. Empty: the
+      batch runs as one vmapped `AbstractStepper.solve` (a stepper whose loop is its integrator's).
+    - `smallest_batch`: the batch size below which gathering stops paying (a cheap step's batch
+      overhead is large).
+    - `bytes_per_scene`: memory a running scene holds beyond its inputs (sizes the batches).
+    """
+
+    passes: tuple[int, ...] = ()
+    smallest_batch: int = 64
+    bytes_per_scene: int = 0
+
+
+class AbstractStepper(eqx.Module):
+    """One scene's run as a loop, the protocol every model and integrator is driven through.
+
+    A stepper is a value made by `AbstractModel.stepper(integrator, save, t1)`: whatever can be
+    computed once per model (mass matrices, tangents, preloads) is computed there and carried as
+    data, so that a batch builds it once and vmaps it like the model. The state is a pytree of
+    arrays of fixed structure. Every method is pure and traceable (`vmap`, `jit`):
+
+    - `init(excitation)` → the state at the excitation's start;
+    - `step(excitation, state)` → the state after one loop step (a segment, a chunk of steps, an
+      attempted step: the model's unit of work);
+    - `done(state)` → whether the answer is fixed *or* the run can go no further (its bound of
+      `max_steps` steps included), so that `while not done: step` always ends;
+    - `finish(excitation, state)` → the `Solution` (a run cut off by its bound reports it in
+      `status`).
+
+    `simulate` is `solve` (init, step until done, finish); the spectra and batches advance many
+    scenes `n` steps at a time with `advance` (`schedule`). A stepper whose integrator has a loop of
+    its own (a whole `diffrax.diffeqsolve`) runs in `init` and declares `max_steps = 0`.
+    `checkpointed`: the loop of `solve` is reverse-mode differentiable (equinox's checkpointed
+    while loop; else a `lax.while_loop`: forward mode only).
+    """
+
+    @property
+    @abc.abstractmethod
+    def max_steps(self) -> int:
+        """Bound on loop steps (static); 0: the whole run is done in `init`."""
+
+    @property
+    @abc.abstractmethod
+    def checkpointed(self) -> bool:
+        """Whether `solve`'s loop is reverse-mode differentiable (static)."""
+
+    @abc.abstractmethod
+    def init(self, excitation: AbstractExcitation) -> PyTree:
+        """The state at the excitation's start."""
+
+    @abc.abstractmethod
+    def step(self, excitation: AbstractExcitation, state: PyTree) -> PyTree:
+        """One loop step; called only on a state that is not done (under `vmap`, a done lane's
+        result is discarded by the loop)."""
+
+    @abc.abstractmethod
+    def done(self, state: PyTree) -> Bool[Array, ""]:
+        """Answer fixed, or no further step allowed."""
+
+    @abc.abstractmethod
+    def finish(self, excitation: AbstractExcitation, state: PyTree) -> Solution:
+        """The run's `Solution` from its last state."""
+
+    @property
+    def schedule(self) -> Schedule:
+        """How a batch of these scenes is advanced (default: one vmapped `solve` per batch)."""
+        return Schedule()
+
+    def advance(self, excitation: AbstractExcitation, state: PyTree, n) -> PyTree:
+        """At most `n` (may be traced) more steps; forward-mode loop."""
+        state, _ = jax.lax.while_loop(lambda sk: ~self.done(sk[0]) & (sk[1] < n),
+                                      lambda sk: (self.step(excitation, sk[0]), sk[1] + 1), (state, 0))
+        return state
+
+    def solve(self, excitation: AbstractExcitation) -> Solution:
+        """init, step until done, finish."""
+        state = self.init(excitation)
+        if self.max_steps > 0:
+            body = lambda s: self.step(excitation, s)
+            cond = lambda s: ~self.done(s)
+            if self.checkpointed:
+                state = eqxi.while_loop(cond, body, state, max_steps=self.max_steps, kind="checkpointed")
+            else:
+                state = jax.lax.while_loop(cond, body, state)
+        return self.finish(excitation, state)
 
 
 def check_autodiff(autodiff: str):
@@ -51,8 +170,10 @@ class AbstractModel(eqx.Module):
         """The integrator used when `simulate` is given none."""
 
     @abc.abstractmethod
-    def run(self, excitation: AbstractExcitation, integrator: AbstractIntegrator, save: Save | None, t1) -> Solution:
-        """Integrate from the excitation's start; see `simulate`."""
+    def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> AbstractStepper:
+        """The run of a scene of this model with `integrator` as an `AbstractStepper`: a summary
+        (`save` None, stopping when the answer is fixed) or a time history at `save.ts` up to `t1`
+        (see `simulate`). A model refuses an integrator it cannot run with a `JaxrockInputError`."""
 
     @property
     @abc.abstractmethod
@@ -62,6 +183,30 @@ class AbstractModel(eqx.Module):
     def limits(self) -> tuple[Limit, ...]:
         """Valid ranges of the model's parameters beyond its block's (`jaxrock._validate.Limit`)."""
         return ()
+
+
+class ModelKind(NamedTuple):
+    """A model kind that scenes files name (`jaxrock.batch`'s `model` column, the CLI's `--model`):
+    `build(block, **parameters)` makes the model of one scene (traceable: batches vmap it), from the
+    scene's `Block` and the values of its `parameters` (batch columns, e.g. `eta`, `cbar`, `E`; a
+    parameter left out is not passed, so the builder's default applies)."""
+
+    name: str
+    build: Callable[..., "AbstractModel"]
+    parameters: tuple[str, ...] = ()
+    description: str = ""
+
+
+MODEL_KINDS: dict[str, ModelKind] = {}
+
+
+def register_model_kind(name: str, build: Callable[..., "AbstractModel"], parameters: tuple[str, ...] = (),
+                        description: str = "") -> ModelKind:
+    """Make a model kind nameable in scenes files (`jaxrock.batch`); a module registers its own."""
+    if not name or name != name.lower() or "," in name:
+        raise JaxrockInputError(f"model kind {name!r}: a lower-case name without commas")
+    MODEL_KINDS[name] = kind = ModelKind(name, build, tuple(parameters), description)
+    return kind
 
 
 def scene_limits(model: AbstractModel, excitation: AbstractExcitation) -> tuple[Limit, ...]:
@@ -121,7 +266,7 @@ def _run(model, excitation, integrator, save, t1):
     # numbers reuse it. Composes with an outer jit, vmap and grad.
     ok = within_limits(scene_limits(model, excitation))
     model, excitation = _neutral(model, ok), _neutral(excitation, ok)
-    return flag_invalid(model.run(excitation, integrator, save, t1), ok)
+    return flag_invalid(model.stepper(integrator, save, t1).solve(excitation), ok)
 
 
 # A valid, quiet scene (2h = 10 m, tanα = 0.2 at rest under 1 m/s², below its uplift at 1.96 m/s²):

@@ -30,11 +30,10 @@ overturning time.
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import NamedTuple
 
 import diffrax
 import equinox as eqx
-import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
@@ -43,7 +42,7 @@ from ._rootfind import SafeNewton
 from ._validate import JaxrockInputError, Limit, check_limits
 from .excitation import AbstractExcitation
 from .geometry import G, Block
-from .model import AbstractIntegrator, AbstractModel, check_autodiff, diffrax_adjoint
+from .model import AbstractIntegrator, AbstractModel, AbstractStepper, Schedule, check_autodiff, diffrax_adjoint, register_model_kind
 from .results import Save, Solution, Status
 
 _REST, _ROCKING, _OVERTURNED = 0, 1, 2
@@ -137,8 +136,10 @@ class RigidModel(AbstractModel):
         peak = (a - jnp.arccos(jnp.where(over, jnp.cos(a), jnp.maximum(c, -1.0)))) / a
         return jnp.where(over, self.threshold, peak)
 
-    def run(self, excitation, integrator, save, t1):
-        return _run(self, excitation, integrator, save, t1)
+    def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> "RigidStepper":
+        if not isinstance(integrator, EventIntegrator):
+            raise JaxrockInputError(f"RigidModel needs an EventIntegrator, got {type(integrator).__name__}")
+        return RigidStepper(self, integrator, save, t1)
 
 
 class _Carry(eqx.Module):
@@ -164,93 +165,121 @@ def _event_status(result) -> Status:
     return Status.where(ok, Status.ok, Status.where(steps, Status.max_steps, Status.solver_failed))
 
 
-class _Machinery(eqx.Module):
-    """The segment loop of one scene, split so that a batch can be advanced in passes (`spectra`)."""
+class _Scene(NamedTuple):
+    """The per-scene constants of a run (cheap scalars, recomputed where needed)."""
 
-    body: Callable
-    active: Callable
-    c0: _Carry
-    finish: Callable
-
-
-def _run(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, save: Save | None, t1) -> Solution:
-    m = _machinery(model, exc, integ, save, t1)
-    kind = "lax" if integ.autodiff == "forward" else "checkpointed"
-    c = eqxi.while_loop(m.active, m.body, m.c0, max_steps=integ.max_iterations, kind=kind)
-    return m.finish(c)
-
-
-# -- resumable runs: used by `overturning_spectrum` to compact a batch between passes -------------
-def start(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator) -> _Carry:
-    return _machinery(model, exc, integ, None, None).c0
+    alpha: Array
+    p: Array
+    eta: Array
+    level: Array  # uplift acceleration g tanα′
+    thr: Array  # overturning |θ|/α′
+    t_end: Array  # excitation end
+    t_stop: Array  # run end: excitation end (summary) or t1 (history)
+    h_nom: Array  # nominal step
+    eps: Array
+    tiny: Array
 
 
-def advance(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, c: _Carry, n) -> _Carry:
-    """Run at most `n` (may be traced) more loop iterations of a summary run."""
-    m = _machinery(model, exc, integ, None, None)
-    c, _ = jax.lax.while_loop(lambda ck: m.active(ck[0]) & (ck[1] < n), lambda ck: (m.body(ck[0]), ck[1] + 1), (c, 0))
-    return c
+class RigidStepper(AbstractStepper):
+    """The rigid model's segment loop (module docstring) as an `AbstractStepper`: one step is one
+    segment or one time window of a segment (`EventIntegrator.chunk_steps`); the state is `_Carry`."""
 
+    model: RigidModel
+    integrator: EventIntegrator
+    save: Save | None
+    t1: Array | None
 
-def finish(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, c: _Carry) -> Solution:
-    return _machinery(model, exc, integ, None, None).finish(c)
+    @property
+    def max_steps(self) -> int:
+        return self.integrator.max_iterations
 
+    @property
+    def checkpointed(self) -> bool:
+        return self.integrator.autodiff == "reverse"
 
-def is_finished(c: _Carry):
-    return c.finished
+    @property
+    def schedule(self) -> Schedule:
+        # short first passes (most cells finish within a few segments), then longer ones; below 64
+        # cells a smaller batch stops paying (a segment is cheap, a batch's overhead is not)
+        return Schedule(passes=(4, 8, 16, 32), smallest_batch=64, bytes_per_scene=0)
 
+    @property
+    def summary_only(self) -> bool:
+        return self.save is None
 
-def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrator, save: Save | None, t1) -> _Machinery:
-    block = model.block
-    alpha, p, eta = block.alpha_r, block.p_r, model.restitution
-    level = block.uplift_acceleration
-    thr = jnp.asarray(model.threshold, dtype=float)
-    summary_only = save is None
-    t_end = exc.t_end
-    t_stop = t_end if summary_only else jnp.asarray(t1, dtype=float)
-    h_nom = jnp.minimum(exc.max_step, 0.05 / p)
-    dtype = jnp.result_type(float)
-    eps, tiny = jnp.finfo(dtype).eps, jnp.finfo(dtype).tiny
+    def _scene(self, exc: AbstractExcitation) -> _Scene:
+        model, block = self.model, self.model.block
+        p = block.p_r
+        dtype = jnp.result_type(float)
+        t_end = exc.t_end
+        return _Scene(
+            alpha=block.alpha_r,
+            p=p,
+            eta=model.restitution,
+            level=block.uplift_acceleration,
+            thr=jnp.asarray(model.threshold, dtype=float),
+            t_end=t_end,
+            t_stop=t_end if self.summary_only else jnp.asarray(self.t1, dtype=float),
+            h_nom=jnp.minimum(exc.max_step, 0.05 / p),
+            eps=jnp.finfo(dtype).eps,
+            tiny=jnp.finfo(dtype).tiny,
+        )
 
-    def vf(t, y, args):
-        theta, omega = y
-        return omega, model.acceleration(t, theta, args, exc)
+    def init(self, exc: AbstractExcitation) -> _Carry:
+        dtype = jnp.result_type(float)
+        zero = jnp.zeros((), dtype)
+        save = self.save
+        hist0 = None if save is None else {k: jnp.zeros_like(save.ts) for k in save.fields}
+        return _Carry(
+            t=jnp.asarray(exc.t_start, dtype),
+            theta=zero,
+            omega=zero,
+            side=jnp.ones((), dtype),
+            mode=jnp.asarray(_REST),
+            peak=zero,
+            n_impacts=jnp.zeros((), jnp.int32),
+            n_segments=jnp.zeros((), jnp.int32),
+            dt_next=zero,
+            status=Status.ok,
+            t_overturn=jnp.asarray(jnp.inf, dtype),
+            t_uplift=jnp.asarray(jnp.inf, dtype),
+            finished=jnp.asarray(False),
+            hist=hist0,
+        )
 
-    term = diffrax.ODETerm(vf)
-    cond_impact = lambda t, y, args, **kw: args * y[0]
-    cond_apex = lambda t, y, args, **kw: args * y[1]
-    cond_over = lambda t, y, args, **kw: args * y[0] - thr * alpha
-    event = diffrax.Event(
-        # diffrax gives priority by list position when several events fire in one step. Order
-        # them as they can occur in time within one flight: crossing the overturning angle comes
-        # before any apex beyond it, and an apex before the impact that ends its flight.
-        [cond_over, cond_apex, cond_impact],
-        # Safeguarded Newton on the step's dense output: plain Newton stalls at apexes where θ̈ ≈ 0.
-        root_finder=SafeNewton(rtol=integ.root_tol, atol=integ.root_tol),
-        direction=[True, False, False],
-    )
-    controller = diffrax.PIDController(
-        rtol=integ.rtol, atol=integ.atol, dtmax=exc.max_step, step_ts=exc.step_ts
-    )
+    def done(self, c: _Carry):
+        return c.finished | (c.n_segments >= self.max_steps)
 
-    def will_overturn(c: _Carry):
-        return model.free_peak(c.theta, c.omega, c.side) >= thr
+    def finish(self, exc: AbstractExcitation, c: _Carry) -> Solution:
+        status = Status.where(~c.finished & (c.status == Status.ok), Status.max_iterations, c.status)
+        return _solution(self.model, c, status, self.summary_only, self.save)
 
-    def segment_end(c: _Carry):
+    def step(self, exc: AbstractExcitation, c: _Carry) -> _Carry:
+        sc = self._scene(exc)
+        is_rest = c.mode == _REST
+        c = eqx.tree_at(lambda x: x.n_segments, c, c.n_segments + 1)
+        c_rest = self._rest_step(sc, exc, c)
+        # a block that uplifts in this iteration rocks in the same iteration
+        c = jax.tree_util.tree_map(lambda a, b: jnp.where(is_rest, a, b), c_rest, c)
+        return self._rock_step(sc, exc, c, (c.mode == _ROCKING) & ~c.finished)
+
+    def _will_overturn(self, sc: _Scene, c: _Carry):
+        return self.model.free_peak(c.theta, c.omega, c.side) >= sc.thr
+
+    def _segment_end(self, sc: _Scene, c: _Carry):
         # Summary runs stop at the end of the excitation unless the free motion overturns.
-        go_on = summary_only & (c.t >= t_end) & will_overturn(c)
-        end = jnp.where(go_on, c.t + 1e4 / p, t_stop)
+        go_on = self.summary_only & (c.t >= sc.t_end) & self._will_overturn(sc, c)
+        end = jnp.where(go_on, c.t + 1e4 / sc.p, sc.t_stop)
         return jnp.maximum(end, c.t)
 
-    def active(c: _Carry):
-        return ~c.finished
-
-    def min_step(t):
+    @staticmethod
+    def _min_step(sc: _Scene, t):
         """Smallest step: 1e-8/p, but resolvable at time t in this precision."""
-        return jnp.maximum(1e-8 / p, 64 * eps * (jnp.abs(t) + 1 / p))
+        return jnp.maximum(1e-8 / sc.p, 64 * sc.eps * (jnp.abs(t) + 1 / sc.p))
 
-    def rest_step(c: _Carry) -> _Carry:
-        t_up = exc.next_exceedance(c.t, level)
+    def _rest_step(self, sc: _Scene, exc: AbstractExcitation, c: _Carry) -> _Carry:
+        save, t_stop = self.save, sc.t_stop
+        t_up = exc.next_exceedance(c.t, sc.level)
         starts = t_up < t_stop
         t_new = jnp.where(starts, t_up, c.t)
         side = -jnp.sign(exc(t_new))
@@ -273,11 +302,14 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
             is_leaf=lambda x: x is None,
         )
 
-    def rock_step(c: _Carry, is_rocking) -> _Carry:
-        t_seg = jnp.where(is_rocking, segment_end(c), c.t)
+    def _rock_step(self, sc: _Scene, exc: AbstractExcitation, c: _Carry, is_rocking) -> _Carry:
+        model, integ, save, summary_only = self.model, self.integrator, self.save, self.summary_only
+        alpha, p, eta, thr, t_end, h_nom, tiny = sc.alpha, sc.p, sc.eta, sc.thr, sc.t_end, sc.h_nom, sc.tiny
+        term, event, controller = self._diffrax_parts(sc, exc)
+        t_seg = jnp.where(is_rocking, self._segment_end(sc, c), c.t)
         acc0 = model.acceleration(c.t, c.theta, c.side, exc)
         at_zero = c.theta == 0
-        dt_min = min_step(c.t)
+        dt_min = self._min_step(sc, c.t)
         dt_flight = 0.05 * jnp.abs(c.omega) / jnp.maximum(jnp.abs(acc0), tiny)
         dt0 = jnp.where(at_zero, jnp.clip(dt_flight, dt_min, h_nom), h_nom)
         dt0 = jnp.where(c.dt_next > 0, c.dt_next, dt0)
@@ -355,7 +387,7 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         omega_new = jnp.where(hit_impact, jnp.where(zeno, 0.0, omega_imp), jnp.where(hit_apex | back_to_rest, 0.0, omf))
         side_new = jnp.where(hit_impact, side_imp, c.side)
         mode = jnp.where(hit_over, _OVERTURNED, jnp.where(zeno | back_to_rest, _REST, c.mode))
-        t_new = jnp.where(back_to_rest, c.t + min_step(c.t), tf)
+        t_new = jnp.where(back_to_rest, c.t + self._min_step(sc, c.t), tf)
         no_event = ~(hit_impact | hit_apex | hit_over)
         bad = status != Status.ok
         seg_done = is_rocking & no_event & ~chunked & (tf >= t_seg)
@@ -384,37 +416,31 @@ def _machinery(model: RigidModel, exc: AbstractExcitation, integ: EventIntegrato
         )
         return out
 
-    def body(c: _Carry) -> _Carry:
-        is_rest = c.mode == _REST
-        c = eqx.tree_at(lambda x: x.n_segments, c, c.n_segments + 1)
-        c_rest = rest_step(c)
-        # a block that uplifts in this iteration rocks in the same iteration
-        c = jax.tree_util.tree_map(lambda a, b: jnp.where(is_rest, a, b), c_rest, c)
-        return rock_step(c, (c.mode == _ROCKING) & ~c.finished)
+    def _diffrax_parts(self, sc: _Scene, exc: AbstractExcitation):
+        """The rocking equation's term, its three events and the step-size controller."""
+        model, integ, thr, alpha = self.model, self.integrator, sc.thr, sc.alpha
 
-    zero = jnp.zeros((), dtype)
-    hist0 = None if summary_only else {k: jnp.zeros_like(save.ts) for k in save.fields}
-    c0 = _Carry(
-        t=jnp.asarray(exc.t_start, dtype),
-        theta=zero,
-        omega=zero,
-        side=jnp.ones((), dtype),
-        mode=jnp.asarray(_REST),
-        peak=zero,
-        n_impacts=jnp.zeros((), jnp.int32),
-        n_segments=jnp.zeros((), jnp.int32),
-        dt_next=zero,
-        status=Status.ok,
-        t_overturn=jnp.asarray(jnp.inf, dtype),
-        t_uplift=jnp.asarray(jnp.inf, dtype),
-        finished=jnp.asarray(False),
-        hist=hist0,
-    )
-    def finish(c: _Carry) -> Solution:
-        status = Status.where(~c.finished & (c.status == Status.ok), Status.max_iterations, c.status)
-        return _solution(model, c, status, summary_only, save)
+        def vf(t, y, args):
+            theta, omega = y
+            return omega, model.acceleration(t, theta, args, exc)
 
-    return _Machinery(body, active, c0, finish)
+        term = diffrax.ODETerm(vf)
+        cond_impact = lambda t, y, args, **kw: args * y[0]
+        cond_apex = lambda t, y, args, **kw: args * y[1]
+        cond_over = lambda t, y, args, **kw: args * y[0] - thr * alpha
+        event = diffrax.Event(
+            # diffrax gives priority by list position when several events fire in one step. Order
+            # them as they can occur in time within one flight: crossing the overturning angle comes
+            # before any apex beyond it, and an apex before the impact that ends its flight.
+            [cond_over, cond_apex, cond_impact],
+            # Safeguarded Newton on the step's dense output: plain Newton stalls at apexes where θ̈ ≈ 0.
+            root_finder=SafeNewton(rtol=integ.root_tol, atol=integ.root_tol),
+            direction=[True, False, False],
+        )
+        controller = diffrax.PIDController(
+            rtol=integ.rtol, atol=integ.atol, dtmax=exc.max_step, step_ts=exc.step_ts
+        )
+        return term, event, controller
 
 
 def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, save: Save | None) -> Solution:
@@ -436,3 +462,12 @@ def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, 
         history=c.hist,
         n_iterations=c.n_segments,
     )
+
+
+def _scene(block: Block, eta=None) -> RigidModel:
+    """A scenes file's rigid model: η always an array (the block's η′ by default), so that rows
+    with and without `eta` share one batch."""
+    return RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
+
+
+register_model_kind("rigid", _scene, ("eta",), "Housner's rigid block (RM)")

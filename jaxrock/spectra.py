@@ -1,9 +1,10 @@
 """Overturning spectra: max |θ|/α′ over a grid of (ω_p/p′, a_p/(g tanα′)), by `vmap`.
 
 In these coordinates the rigid spectrum depends on α′ only (SPEC "Spectra"). The grid is run in
-batches of `batch_size` cells (memory stays bounded); for the rigid model and generalized-α
-spring runs each batch is advanced in passes of a few loop iterations and the cells still running
-are gathered into a smaller batch between passes, so that a few long cells (chattering near the
+batches of `batch_size` cells (memory stays bounded), each driven through the model's
+`AbstractStepper`: where its `Schedule` has passes (the rigid model, generalized-α spring runs) a
+batch is advanced a few loop steps at a time and the cells still running are gathered into a
+smaller batch between passes, so that a few long cells (chattering near the
 uplift line, rocking near the overturning line) do not make the whole batch wait for them. A
 `checkpoint` file keeps finished batches: an interrupted run resumes where it stopped.
 """
@@ -21,13 +22,12 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import beam, interrupt, provenance, rigid, spring
-from .generalized_alpha import GeneralizedAlpha
+from . import interrupt, provenance
 from ._files import exclusive, write_atomically
 from ._validate import JaxrockInputError, check_grid
 from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
 from .geometry import G
-from .model import AbstractIntegrator, AbstractModel, simulate
+from .model import AbstractIntegrator, AbstractModel, AbstractStepper
 from .results import STATUS_NAMES, Solution
 
 PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}
@@ -136,28 +136,11 @@ class Spectrum(eqx.Module):
 
 
 # -- batched runs ---------------------------------------------------------------------------------
-def _stepper(model, integ):
-    """How a summary run of `model` is advanced in passes: (module with start/advance/finish/
-    is_finished, pass lengths in loop iterations, iteration budget, smallest batch), or None (one
-    vmapped call). Short first passes (most cells finish early), then longer ones for the cells
-    still running. The smallest batch is where a smaller one stops paying (measured): a rigid
-    iteration or a one-DOF spring step is cheap and its batch overhead large (64; 32×32 quasi-rigid
-    grid: 0.09 ms/scene vs 0.15 with 8); a flexible spring step is dear (8)."""
-    if isinstance(model, rigid.RigidModel):
-        return rigid, (4, 8, 16, 32), integ.max_iterations, 64
-    if isinstance(model, spring.SpringModel) and isinstance(integ, GeneralizedAlpha):
-        return spring, (128, 256, 512, 1024), integ.max_steps, 64 if model.column is None else 8
-    return None
-
-
-def _memory_batch(model, integ, budget_bytes: int = 2**29) -> int:
-    """Cells per batch whose per-cell state fits `budget_bytes`: a generalized-α cell keeps its
-    ladder of tangent inverses (levels × N² floats, N = 3n + 1)."""
-    integ = model.default_integrator() if integ is None else integ
-    if not isinstance(integ, GeneralizedAlpha) or not isinstance(model, spring.SpringModel) or model.column is None:
-        return 2**62
-    N = beam.n_dof(model.n_elements)
-    return max(64, budget_bytes // (integ.levels * N * N * 8))
+def batch_limit(stepper: AbstractStepper, budget_bytes: int = 2**29) -> int:
+    """Cells per batch whose running state fits `budget_bytes` (`Schedule.bytes_per_scene`; at
+    least 64), e.g. a flexible generalized-α cell's ladder of tangent inverses."""
+    per = stepper.schedule.bytes_per_scene
+    return 2**62 if per <= 0 else max(64, budget_bytes // per)
 
 
 def _bucket(n: int, batch: int, smallest: int) -> int:
@@ -168,65 +151,78 @@ def _bucket(n: int, batch: int, smallest: int) -> int:
     return size
 
 
-def _vmap(fn, model_batched: bool):
-    """vmap over (model, excitation, *rest): the model too when it carries a batch axis."""
-    return eqx.filter_vmap(fn, in_axes=(eqx.if_array(0) if model_batched else None, eqx.if_array(0)))
+def _vmap(fn, batched: bool):
+    """vmap over (stepper, excitation, *rest): the stepper too when it carries a batch axis."""
+    return eqx.filter_vmap(fn, in_axes=(eqx.if_array(0) if batched else None, eqx.if_array(0)))
 
 
 @eqx.filter_jit
-def _start(mod, model, integ, exc, model_batched):
-    return _vmap(lambda m, e: mod.start(m, e, integ), model_batched)(model, exc)
+def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_batched: bool = False) -> AbstractStepper:
+    """The summary stepper of `model` (of each model, vmapped, when `model_batched`): what a model
+    prepares once (mass matrices, tangents, preloads) is computed once for the whole batch."""
+    if model_batched:
+        return eqx.filter_vmap(lambda m: m.stepper(integrator))(model)
+    return model.stepper(integrator)
+
+
+# `_init` and `_advance` return the states with their done flags: the host loop reads the flags
+# without sending the states back (a flexible cell's state holds its ladder of tangent inverses).
+@eqx.filter_jit
+def _init(stepper, exc, batched):
+    return _vmap(lambda s, e: (lambda c: (c, s.done(c)))(s.init(e)), batched)(stepper, exc)
 
 
 @eqx.filter_jit
-def _advance(mod, model, integ, exc, carry, n, model_batched):
-    return _vmap(lambda m, ec: mod.advance(m, ec[0], integ, ec[1], n), model_batched)(model, (exc, carry))
+def _advance(stepper, exc, state, n, batched):
+    return _vmap(lambda s, es: (lambda c: (c, s.done(c)))(s.advance(es[0], es[1], n)), batched)(stepper, (exc, state))
 
 
 @eqx.filter_jit
-def _finish(mod, model, integ, exc, carry, model_batched):
-    return _vmap(lambda m, ec: mod.finish(m, ec[0], integ, ec[1]), model_batched)(model, (exc, carry))
+def _finish(stepper, exc, state, batched):
+    return _vmap(lambda s, es: s.finish(es[0], es[1]), batched)(stepper, (exc, state))
 
 
 @eqx.filter_jit
-def _simulate_batch(model, integ, exc, model_batched):
-    return _vmap(lambda m, e: simulate(m, e, integrator=integ), model_batched)(model, exc)
+def _solve(stepper, exc, batched):
+    return _vmap(lambda s, e: s.solve(e), batched)(stepper, exc)
 
 
-def _compacted_batch(mod, passes, budget, smallest, model, excitations, integ, model_batched: bool) -> Solution:
-    """Run a batch in passes, gathering the cells still running between passes (the same
-    results as `simulate`, cell by cell)."""
+def _compacted(stepper: AbstractStepper, excitations, batched: bool) -> Solution:
+    """Run a batch in passes (`Schedule.passes`), gathering the cells still running between
+    passes: the same results as `simulate`, cell by cell."""
+    passes, smallest = stepper.schedule.passes, stepper.schedule.smallest_batch
     n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
-    # The carry (and the batched inputs) live on the host between passes: gathers and scatters of
+    # The state (and the batched inputs) live on the host between passes: gathers and scatters of
     # changing sizes in numpy cost nothing, where in JAX each new size would compile.
     tree_np = lambda t: jax.tree_util.tree_map(np.array, t)
     dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
-    dyn_m, static_m = eqx.partition(model, eqx.is_array)
-    dyn_e, dyn_m = tree_np(dyn_e), tree_np(dyn_m)
-    carry = tree_np(_start(mod, model, integ, excitations, model_batched))
+    dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
+    dyn_e, dyn_s = tree_np(dyn_e), tree_np(dyn_s)
+    state, done = tree_np(_init(stepper, excitations, batched))
     used, k = 0, 0
-    while used < budget:
-        todo = np.flatnonzero(~np.asarray(mod.is_finished(carry)))
+    while used < stepper.max_steps:
+        todo = np.flatnonzero(~done)
         if todo.size == 0:
             break
-        n_pass = min(passes[k], budget - used)
+        n_pass = min(passes[k], stepper.max_steps - used)
         size = _bucket(todo.size, n, smallest)
         for lo in range(0, todo.size, size):
             idx = todo[lo : lo + size]
             padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
             take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
-            sub_m = eqx.combine(take(dyn_m), static_m) if model_batched else model
+            sub_s = eqx.combine(take(dyn_s), static_s) if batched else stepper
             sub_e = eqx.combine(take(dyn_e), static_e)
-            sub_c = tree_np(_advance(mod, sub_m, integ, sub_e, take(carry), jnp.asarray(n_pass), model_batched))
+            sub_c, sub_done = tree_np(_advance(sub_s, sub_e, take(state), jnp.asarray(n_pass), batched))
 
             def put(x, y):
                 x[idx] = y[: idx.size]
                 return x
 
-            carry = jax.tree_util.tree_map(put, carry, sub_c)
+            state = jax.tree_util.tree_map(put, state, sub_c)
+            done[idx] = sub_done[: idx.size]
         used += n_pass
         k = min(k + 1, len(passes) - 1)
-    return _finish(mod, model, integ, excitations, carry, model_batched)
+    return _finish(stepper, excitations, state, batched)
 
 
 def run_batch(
@@ -237,12 +233,14 @@ def run_batch(
     model_batched: bool = False,
 ) -> Solution:
     """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
-    and so does `model` when `model_batched` (one model per scene; else one model for all)."""
+    and so does `model` when `model_batched` (one model per scene; else one model for all).
+    Driven through the model's `AbstractStepper`: in passes with the running cells gathered between
+    them when its `schedule` has passes, else as one vmapped `solve`."""
     integ = model.default_integrator() if integrator is None else integrator
-    stepper = _stepper(model, integ)
-    if stepper is not None:
-        return _compacted_batch(*stepper, model, excitations, integ, model_batched)
-    return _simulate_batch(model, integ, excitations, model_batched)
+    stepper = make_stepper(model, integ, model_batched)
+    if stepper.schedule.passes:
+        return _compacted(stepper, excitations, model_batched)
+    return _solve(stepper, excitations, model_batched)
 
 
 def _pulse_class(pulse):
@@ -309,7 +307,8 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
             done[cells] = True
             for k in fields:
                 out[k][cells] = saved[k]
-    batch_size = min(int(batch_size), _memory_batch(model, integrator))
+    integ = model.default_integrator() if integrator is None else integrator
+    batch_size = min(int(batch_size), batch_limit(make_stepper(model, integ)))  # compiled once, reused by run_batch
     starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
     bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
     for s in starts:

@@ -65,8 +65,8 @@ from ._peaks import hermite_peak as _hermite_peak
 from .excitation import AbstractExcitation
 from .generalized_alpha import GeneralizedAlpha
 from .geometry import G, Block
-from .model import AbstractIntegrator, AbstractModel, check_autodiff, diffrax_adjoint
-from .results import Solution, Status
+from .model import AbstractModel, AbstractSpringIntegrator, AbstractStepper, check_autodiff, diffrax_adjoint, register_model_kind
+from .results import Save, Solution, Status
 
 # Backbone and θs/α′: the study of benchmarks/bench_backbone.py (its results file): 192 quasi-rigid
 # and 48 flexible (concrete, 10 elements) scenes, tanα 0.05–0.35, 2h 1–50 m, ω_p/p′ 1–15,
@@ -81,6 +81,7 @@ from .results import Solution, Status
 # generalized-α's jacfwd, 2.7 % with Tsit5's forward mode (tanh: 0.13 % and 3e-6).
 DEFAULT_SMOOTHING = 1e-4
 DEFAULT_BACKBONE = "tanh"
+DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA = 30e9, 2500.0, 0.01  # a scenes file's column: concrete (paper sections 4–6)
 QUASI_RIGID_RHO = 2500.0  # kg/m³: mass of the quasi-rigid scene (results do not depend on it)
 
 HISTORY_FIELDS = (
@@ -196,6 +197,12 @@ class _Mechanics(eqx.Module):
     @property
     def ndof(self) -> int:
         return 1 if self.n is None else beam.n_dof(self.n)
+
+    @property
+    def settle_margin(self):
+        """Energy margin of a summary's settled test: exact for the one-DOF model; 10 % for the
+        flexural P-Δ softening of a flexible column."""
+        return 1.0 if self.n is None else 0.9
 
     @property
     def theta_up(self):
@@ -412,7 +419,7 @@ _EXPLICIT = {"tsit5": diffrax.Tsit5, "dopri5": diffrax.Dopri5, "dopri8": diffrax
 _SOLVERS = {**_IMPLICIT, **_EXPLICIT}
 
 
-class SpringIntegrator(AbstractIntegrator):
+class SpringIntegrator(AbstractSpringIntegrator):
     """diffrax settings of the spring model: an L-stable ESDIRK solver (`solver` ∈ kvaerno3/4/5,
     stage equations by full Newton) or an explicit Runge–Kutta solver (tsit5, dopri5, dopri8: for
     the one-DOF quasi-rigid SM only, whose one stiff part, the spring's pre-yield branch, is mild),
@@ -437,6 +444,10 @@ class SpringIntegrator(AbstractIntegrator):
             raise JaxrockInputError(f"root_finder = {self.root_finder!r}; valid: ('newton', 'chord')")
         if self.max_steps < 16:
             raise JaxrockInputError(f"max_steps = {self.max_steps}: must be >= 16")
+
+    def stepper(self, model, system, save=None, t1=None) -> DiffraxSpringStepper:
+        """`AbstractSpringIntegrator.stepper`: the whole run in diffrax's loop."""
+        return DiffraxSpringStepper(self, model, system, save, t1)
 
     @property
     def explicit(self) -> bool:
@@ -515,6 +526,119 @@ class SpringIntegrator(AbstractIntegrator):
             adjoint=diffrax_adjoint(self.autodiff),
             throw=throw,
         )
+
+
+class DiffraxSpringStepper(AbstractStepper):
+    """A spring-model run by `SpringIntegrator`: diffrax's `diffeqsolve` runs its own loop, so the
+    whole run is done in `init` (`max_steps = 0`; the state is the `Solution`). A summary runs in two
+    solves: the excitation window, then free motion until the answer is fixed (module docstring);
+    a history is one solve with the peak from the steps' Hermite interpolants."""
+
+    integrator: "SpringIntegrator"
+    model: "SpringModel"
+    system: _Mechanics
+    save: Save | None
+    t1: Array | None
+    @property
+    def max_steps(self) -> int:
+        return 0
+
+    @property
+    def checkpointed(self) -> bool:
+        return True
+
+    def step(self, excitation, state):
+        return state
+
+    def done(self, state):
+        return jnp.asarray(True)
+
+    def finish(self, excitation, state) -> Solution:
+        return state
+
+    def init(self, excitation) -> Solution:
+        model, mech, save, t1 = self.model, self.system, self.save, self.t1
+        alpha_r = model.block.alpha_r
+        thr = model.threshold * alpha_r
+        y0 = mech.initial_state()
+        t_start = excitation.t_start
+        t_end = excitation.t_end
+        N = mech.ndof
+        step_fn = lambda t, y, args: (y[0], y[N])
+        root = optx.Newton(rtol=1e-10, atol=1e-12 * alpha_r)
+        if model.fixed_base:
+            over_fn = lambda t, y, args, **kw: jnp.asarray(1.0)  # never overturns
+        else:
+            over_fn = lambda t, y, args, **kw: thr - jnp.abs(y[0])
+        theta_up = mech.theta_up
+
+        if save is not None:
+            t_final = model.run_end(mech, excitation, save, t1)
+            sub_hist = diffrax.SubSaveAt(ts=save.ts, fn=lambda t, y, args: mech.history(t, y, args[1], save.fields))
+            sub_steps = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
+            sol = self.integrator.solve(
+                mech, excitation, y0, t_start, t_final,
+                event=diffrax.Event(over_fn, root_finder=root),
+                saveat=diffrax.SaveAt(subs=[sub_hist, sub_steps]),
+            )
+            hist, (th, om) = sol.ys
+            ts_steps = sol.ts[1]
+            peak = _hermite_peak(ts_steps, th, om)
+            status = _status_of(sol.result)
+            t_last = jnp.max(jnp.where(jnp.isfinite(ts_steps), ts_steps, -jnp.inf))
+            over = (sol.result == diffrax.RESULTS.event_occurred) & (peak >= thr * (1 - 1e-6))
+            t_over = jnp.where(over, t_last, jnp.inf)
+            return model.solution(peak, over, t_over, _first_exceedance(ts_steps, th, om, theta_up), status, sol.ts[0], hist)
+
+        # phase 1: the excitation window
+        sub = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
+        sol1 = self.integrator.solve(
+            mech, excitation, y0, t_start, t_end,
+            event=diffrax.Event(over_fn, root_finder=root),
+            saveat=diffrax.SaveAt(subs=[sub, diffrax.SubSaveAt(t1=True)]),
+        )
+        (th1, om1), y_end = sol1.ys
+        ts1 = sol1.ts[0]
+        y_end = y_end[-1]
+        peak1 = _hermite_peak(ts1, th1, om1)
+        st1 = _status_of(sol1.result)
+        over1 = (sol1.result == diffrax.RESULTS.event_occurred) & (st1 == Status.ok)
+        # phase 2: free motion until the answer is fixed
+        t_stop = model.run_end(mech, excitation, None, t1)
+        margin = mech.settle_margin
+        v_ref = margin * mech.rigid_potential(peak1)
+
+        def settled(t, y, args, **kw):
+            return args[0].mechanical_energy(y) < v_ref
+
+        y_end = jnp.where(jnp.all(jnp.isfinite(y_end)), y_end, y0)
+        t_start2 = sol1.ts[1][-1]
+        t_start2 = jnp.where(jnp.isfinite(t_start2), t_start2, t_end)
+        # an overturned (or failed) phase 1 still runs phase 2 formally, over a vanishing interval
+        done = over1 | (st1 != Status.ok)
+        t_stop = jnp.where(done, t_start2 + 1e-9, t_stop)
+        sol2 = self.integrator.solve(
+            mech, excitation, y_end, t_start2, t_stop,
+            event=diffrax.Event((over_fn, settled), root_finder=root),
+            saveat=diffrax.SaveAt(steps=True, fn=step_fn),
+            dtmax=jnp.inf,
+        )
+        th2, om2 = sol2.ys
+        ts2 = sol2.ts
+        # join: the last phase-1 point starts phase 2
+        ts2 = jnp.concatenate([jnp.atleast_1d(t_start2), ts2])
+        th2 = jnp.concatenate([jnp.atleast_1d(y_end[0]), th2])
+        om2 = jnp.concatenate([jnp.atleast_1d(y_end[N]), om2])
+        peak2 = jnp.where(done, 0.0, _hermite_peak(ts2, th2, om2))
+        status = _worse(st1, Status.where(done, Status.ok, _status_of(sol2.result)))
+        peak = jnp.maximum(peak1, peak2)
+        over2 = (~done) & (sol2.result == diffrax.RESULTS.event_occurred) & sol2.event_mask[0]
+        ts_all = jnp.concatenate([ts1, ts2])
+        th_all = jnp.concatenate([th1, th2])
+        om_all = jnp.concatenate([om1, om2])
+        t_last2 = jnp.max(jnp.where(jnp.isfinite(ts2), ts2, -jnp.inf))
+        t_over = jnp.where(over1, t_start2, jnp.where(over2, t_last2, jnp.inf))
+        return model.solution(peak, over1 | over2, t_over, _first_exceedance(ts_all, th_all, om_all, theta_up), status)
 
 
 def _status_of(result) -> Status:
@@ -784,134 +908,35 @@ class SpringModel(AbstractModel):
     def mechanical_energy(self, y):
         return self.mechanics().mechanical_energy(y)
 
-    # -- run --------------------------------------------------------------------------------------
-    def run(self, excitation, integrator, save, t1) -> Solution:
-        if not isinstance(integrator, (SpringIntegrator, GeneralizedAlpha)):
+    # -- run ------------------------------------------------------------------------------------
+    def stepper(self, integrator, save=None, t1=None):
+        """The run as an `AbstractStepper` of `integrator` (an `AbstractSpringIntegrator`), on the
+        mechanics prepared here once (energy integrals tracked when `save` asks for energies)."""
+        if not isinstance(integrator, AbstractSpringIntegrator):
             raise JaxrockInputError(f"SpringModel needs a SpringIntegrator or GeneralizedAlpha, got {type(integrator).__name__}")
         fields = () if save is None else save.fields
-        track = any(f in _ENERGY_FIELDS for f in fields)
-        mech = self.mechanics(track_energy=track)
-        alpha_r = self.block.alpha_r
-        thr = self.threshold * alpha_r
-        if isinstance(integrator, GeneralizedAlpha):
-            return self._run_alpha(mech, excitation, integrator, save, t1, thr)
-        y0 = mech.initial_state()
-        t_start = excitation.t_start
-        t_end = excitation.t_end
-        N = mech.ndof
-        step_fn = lambda t, y, args: (y[0], y[N])
-        root = optx.Newton(rtol=1e-10, atol=1e-12 * alpha_r)
-        if self.fixed_base:
-            over_fn = lambda t, y, args, **kw: jnp.asarray(1.0)  # never overturns
-        else:
-            over_fn = lambda t, y, args, **kw: thr - jnp.abs(y[0])
-        theta_up = mech.theta_up
+        mech = self.mechanics(track_energy=any(f in _ENERGY_FIELDS for f in fields))
+        return integrator.stepper(self, mech, save, t1)
 
+    @property
+    def overturn_rotation(self):
+        """|θ| [rad] at which the body has overturned: threshold·α′ (+inf for a fixed base)."""
+        return jnp.inf if self.fixed_base else self.threshold * self.block.alpha_r
+
+    def run_end(self, mech, excitation, save=None, t1=None):
+        """The latest end of a run: `t1` (default the last save time) for a history; for a summary
+        `t1`, or 20 rocking periods 2π/p′ after the excitation."""
         if save is not None:
-            t_final = save.ts[-1] if t1 is None else t1
-            sub_hist = diffrax.SubSaveAt(ts=save.ts, fn=lambda t, y, args: mech.history(t, y, args[1], fields))
-            sub_steps = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
-            sol = integrator.solve(
-                mech, excitation, y0, t_start, t_final,
-                event=diffrax.Event(over_fn, root_finder=root),
-                saveat=diffrax.SaveAt(subs=[sub_hist, sub_steps]),
-            )
-            hist, (th, om) = sol.ys
-            ts_steps = sol.ts[1]
-            peak = _hermite_peak(ts_steps, th, om)
-            status = _status_of(sol.result)
-            t_last = jnp.max(jnp.where(jnp.isfinite(ts_steps), ts_steps, -jnp.inf))
-            return self._summary(peak, t_last, sol.result, ts_steps, th, om, theta_up, status, thr, sol.ts[0], hist)
-
-        # phase 1: the excitation window
-        sub = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
-        sol1 = integrator.solve(
-            mech, excitation, y0, t_start, t_end,
-            event=diffrax.Event(over_fn, root_finder=root),
-            saveat=diffrax.SaveAt(subs=[sub, diffrax.SubSaveAt(t1=True)]),
-        )
-        (th1, om1), y_end = sol1.ys
-        ts1 = sol1.ts[0]
-        y_end = y_end[-1]
-        peak1 = _hermite_peak(ts1, th1, om1)
-        st1 = _status_of(sol1.result)
-        over1 = (sol1.result == diffrax.RESULTS.event_occurred) & (st1 == Status.ok)
-        # phase 2: free motion until the answer is fixed
-        t_stop = self._summary_end(mech, excitation, t1)
-        margin = self._settle_margin(mech)
-        v_ref = margin * mech.rigid_potential(peak1)
-
-        def settled(t, y, args, **kw):
-            return args[0].mechanical_energy(y) < v_ref
-
-        y_end = jnp.where(jnp.all(jnp.isfinite(y_end)), y_end, y0)
-        t_start2 = sol1.ts[1][-1]
-        t_start2 = jnp.where(jnp.isfinite(t_start2), t_start2, t_end)
-        # an overturned (or failed) phase 1 still runs phase 2 formally, over a vanishing interval
-        done = over1 | (st1 != Status.ok)
-        t_stop = jnp.where(done, t_start2 + 1e-9, t_stop)
-        sol2 = integrator.solve(
-            mech, excitation, y_end, t_start2, t_stop,
-            event=diffrax.Event((over_fn, settled), root_finder=root),
-            saveat=diffrax.SaveAt(steps=True, fn=step_fn),
-            dtmax=jnp.inf,
-        )
-        th2, om2 = sol2.ys
-        ts2 = sol2.ts
-        # join: the last phase-1 point starts phase 2
-        ts2 = jnp.concatenate([jnp.atleast_1d(t_start2), ts2])
-        th2 = jnp.concatenate([jnp.atleast_1d(y_end[0]), th2])
-        om2 = jnp.concatenate([jnp.atleast_1d(y_end[N]), om2])
-        peak2 = jnp.where(done, 0.0, _hermite_peak(ts2, th2, om2))
-        status = _worse(st1, Status.where(done, Status.ok, _status_of(sol2.result)))
-        peak = jnp.maximum(peak1, peak2)
-        over2 = (~done) & (sol2.result == diffrax.RESULTS.event_occurred) & sol2.event_mask[0]
-        ts_all = jnp.concatenate([ts1, ts2])
-        th_all = jnp.concatenate([th1, th2])
-        om_all = jnp.concatenate([om1, om2])
-        t_last2 = jnp.max(jnp.where(jnp.isfinite(ts2), ts2, -jnp.inf))
-        t_over = jnp.where(over1, t_start2, jnp.where(over2, t_last2, jnp.inf))
-        return self._finish(peak, over1 | over2, t_over, _first_exceedance(ts_all, th_all, om_all, theta_up), status, thr, None, None)
-
-    def _summary_end(self, mech, excitation, t1):
-        """Summary runs end at t1, or 20 rocking periods 2π/p′ after the excitation."""
+            return save.ts[-1] if t1 is None else t1
         t_end = excitation.t_end
         return t_end + 20 * 2 * jnp.pi / mech.p_r if t1 is None else jnp.maximum(t1, t_end)
 
-    @staticmethod
-    def _settle_margin(mech):
-        """Energy margin of the settled test: exact for the one-DOF model; 10 % for the flexural
-        P-Δ softening of a flexible column."""
-        return 1.0 if mech.n is None else 0.9
-
-    def _run_alpha(self, mech, excitation, integrator, save, t1, thr):
-        if save is None:
-            c0, cond, body, result = self._alpha_summary(excitation, integrator, t1, mech)
-            return self._alpha_solution(result(jax.lax.while_loop(cond, body, c0)), thr)
-        t_stop = save.ts[-1] if t1 is None else t1
-        out = integrator.integrate(mech, excitation, t_stop, thr=self._alpha_threshold(thr), save_ts=save.ts, fields=save.fields)
-        return self._alpha_solution(out, thr, save.ts)
-
-    def _alpha_threshold(self, thr):
-        return jnp.inf if self.fixed_base else thr
-
-    def _alpha_summary(self, excitation, integrator, t1, mech=None):
-        """The generalized-α step loop of a summary run (stops when the answer is fixed)."""
-        mech = self.mechanics() if mech is None else mech
-        thr = self._alpha_threshold(self.threshold * self.block.alpha_r)
-        t_stop = self._summary_end(mech, excitation, t1)
-        return integrator.machinery(mech, excitation, t_stop, thr=thr, settle_margin=self._settle_margin(mech))
-
-    def _alpha_solution(self, out, thr, ts_hist=None):
-        return self._finish(out["peak"], out["overturned"], out["t_overturn"], out["t_up"], out["status"], thr, ts_hist, out["history"], out["steps"])
-
-    def _summary(self, peak, t_last, result, ts, th, om, theta_up, status, thr, ts_hist, hist):
-        over = (result == diffrax.RESULTS.event_occurred) & (peak >= thr * (1 - 1e-6))
-        t_over = jnp.where(over, t_last, jnp.inf)
-        return self._finish(peak, over, t_over, _first_exceedance(ts, th, om, theta_up), status, thr, ts_hist, hist)
-
-    def _finish(self, peak, over, t_over, t_up, status, thr, ts_hist, hist, n_iterations=0):
+    def solution(self, peak, over, t_over, t_up, status, ts_hist=None, hist=None, n_iterations=0) -> Solution:
+        """The `Solution` of a run from its raw summary: peak max |θ| [rad] (clamped to the
+        threshold; the threshold itself once overturned), overturned and its time, the uplift time
+        (+inf: never), the status (a non-finite peak is `solver_failed`), the history."""
         alpha_r = self.block.alpha_r
+        thr = self.threshold * alpha_r
         max_theta = jnp.where(over, self.threshold, jnp.minimum(peak, thr) / alpha_r)
         bad = ~jnp.isfinite(max_theta)
         status = Status.where(bad & (status == Status.ok), Status.solver_failed, status)
@@ -930,30 +955,23 @@ class SpringModel(AbstractModel):
         )
 
 
-# ----------------------------------------------------------------------------------------------
-# summary runs in passes (generalized-α only): `jaxrock.spectra.run_batch` advances a batch a
-# few hundred steps at a time and gathers the scenes still running, so finished ones stop costing
-# ----------------------------------------------------------------------------------------------
-def start(model: SpringModel, exc: AbstractExcitation, integ: GeneralizedAlpha, t1=None) -> dict:
-    return model._alpha_summary(exc, integ, t1)[0]
+def _quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -> SpringModel:
+    """A scenes file's quasi-rigid spring model (added masses; default damper, backbone, smoothing)."""
+    return SpringModel(block, None, cbar=cbar, backbone=DEFAULT_BACKBONE if backbone is None else backbone,
+                       smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
 
 
-def advance(model: SpringModel, exc: AbstractExcitation, integ: GeneralizedAlpha, c: dict, n, t1=None) -> dict:
-    """At most `n` more attempted steps (all remaining ones when `n` is None)."""
-    _, cond, body, _ = model._alpha_summary(exc, integ, t1)
-    if n is None:
-        return jax.lax.while_loop(cond, body, c)
-    c, _ = jax.lax.while_loop(lambda ci: cond(ci[0]) & (ci[1] < n), lambda ci: (body(ci[0]), ci[1] + 1), (c, 0))
-    return c
+def _flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None) -> SpringModel:
+    """A scenes file's flexible spring model: a concrete column unless E, ρ, ζ are given."""
+    column = Column(DEFAULT_E if E is None else E, DEFAULT_RHO if rho is None else rho)
+    return SpringModel(block, column, zeta=DEFAULT_ZETA if zeta is None else zeta, cbar=cbar,
+                       backbone=DEFAULT_BACKBONE if backbone is None else backbone,
+                       smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
 
 
-def finish(model: SpringModel, exc: AbstractExcitation, integ: GeneralizedAlpha, c: dict, t1=None) -> Solution:
-    result = model._alpha_summary(exc, integ, t1)[3]
-    return model._alpha_solution(result(c), model.threshold * model.block.alpha_r)
-
-
-def is_finished(c: dict):
-    return c["done"] | c["failed"]
+register_model_kind("spring", _quasi_rigid_scene, ("cbar", "backbone", "smoothing"), "quasi-rigid spring model (SM), added masses")
+register_model_kind("spring-flexible", _flexible_scene, ("cbar", "E", "rho", "zeta", "backbone", "smoothing"),
+                    "spring model with an elastic column (concrete by default)")
 
 
 __all__ = [

@@ -1,0 +1,211 @@
+"""The run-loop protocol (`jaxrock.AbstractStepper`), proved by a newcomer's model.
+
+A linear oscillator that "overturns" past an amplitude is written here, in this file only, as a
+user would write a new model: an `AbstractModel` whose `stepper` gives init / step / done / finish,
+registered as a model kind for scenes files. It then runs through `simulate`,
+`overturning_spectrum` (passes with the running cells gathered between them) and `run_scenes`
+without any change to those, and every entry point agrees with an independent SciPy solve of the
+same equation and with each other.
+
+    θ̈ + 2ζ p θ̇ + p² θ = −p² üg(t)/g     (static response to a steady üg: θ = −üg/g)
+
+integrated by classical RK4 at a fixed step h = (2π/p)/`per_period` (a loop step is `substeps`
+RK4 steps); max |θ| is taken at the step points; "overturned" once |θ| ≥ threshold·α′.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import jaxrock as jr
+from jaxrock.model import MODEL_KINDS
+
+G = 9.81
+
+
+class RK4(jr.AbstractIntegrator):
+    per_period: int = eqx.field(static=True, default=200)
+    substeps: int = eqx.field(static=True, default=8)
+    max_steps: int = eqx.field(static=True, default=4096)
+
+
+class Oscillator(jr.AbstractModel):
+    block: jr.Block
+    zeta: jax.Array = 0.05  # (AbstractModel declares block and threshold: fields after them need defaults)
+    threshold: float = 1.0
+
+    def default_integrator(self):
+        return RK4()
+
+    @property
+    def history_fields(self):
+        return ()
+
+    def stepper(self, integrator, save=None, t1=None):
+        if save is not None:
+            raise jr.JaxrockInputError("the oscillator gives summaries only")
+        return OscillatorStepper(self, integrator)
+
+    def rhs(self, t, y, excitation):
+        p = self.block.p_r
+        return jnp.stack([y[1], -2 * self.zeta * p * y[1] - p**2 * y[0] - p**2 * excitation(t) / G])
+
+
+class OscillatorStepper(jr.AbstractStepper):
+    model: Oscillator
+    integrator: RK4
+
+    @property
+    def max_steps(self):
+        return self.integrator.max_steps
+
+    @property
+    def checkpointed(self):
+        return True
+
+    @property
+    def schedule(self):
+        return jr.Schedule(passes=(2, 4), smallest_batch=4)
+
+    def h(self):
+        return 2 * jnp.pi / self.model.block.p_r / self.integrator.per_period
+
+    def t_stop(self, excitation):
+        return excitation.t_end + 3 * 2 * jnp.pi / self.model.block.p_r  # three free periods
+
+    def init(self, excitation):
+        z = jnp.zeros(())
+        # the end time rides in the state: `done` sees the state only
+        return dict(t=jnp.asarray(excitation.t_start, float), t_stop=self.t_stop(excitation), y=jnp.zeros(2), peak=z,
+                    over=jnp.asarray(False),
+                    t_over=jnp.asarray(jnp.inf), t_up=jnp.asarray(jnp.inf), n=jnp.zeros((), jnp.int32))
+
+    def step(self, excitation, s):
+        h, m = self.h(), self.model
+        limit = m.threshold * m.block.alpha_r
+        t_stop = s["t_stop"]
+
+        def rk4(_, s):
+            t, y = s["t"], s["y"]
+            f = lambda tt, yy: m.rhs(tt, yy, excitation)
+            k1 = f(t, y)
+            k2 = f(t + h / 2, y + h / 2 * k1)
+            k3 = f(t + h / 2, y + h / 2 * k2)
+            k4 = f(t + h, y + h * k3)
+            y1 = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            a1 = jnp.abs(y1[0])
+            go = ~s["over"] & (t < t_stop)
+            over = a1 >= limit
+            new = dict(t=t + h, t_stop=t_stop, y=y1, peak=jnp.maximum(s["peak"], a1), over=over,
+                       t_over=jnp.where(over, t + h, s["t_over"]),
+                       t_up=jnp.where(jnp.isinf(s["t_up"]) & (a1 > 1e-3 * m.block.alpha_r), t + h, s["t_up"]), n=s["n"])
+            return jax.tree_util.tree_map(lambda a, b: jnp.where(go, a, b), new, s)
+
+        s = jax.lax.fori_loop(0, self.integrator.substeps, rk4, s)
+        return dict(s, n=s["n"] + 1)
+
+    def done(self, s):
+        return s["over"] | (s["t"] >= s["t_stop"]) | (s["n"] >= self.max_steps)
+
+    def finish(self, excitation, s):
+        m = self.model
+        finished = s["over"] | (s["t"] >= s["t_stop"])
+        status = jr.Status.where(finished, jr.Status.ok, jr.Status.max_iterations)
+        peak = jnp.where(s["over"], m.threshold, jnp.minimum(s["peak"] / m.block.alpha_r, m.threshold))
+        return jr.Solution(max_theta=peak, overturned=s["over"], t_overturn=s["t_over"], uplifted=jnp.isfinite(s["t_up"]),
+                           t_uplift=s["t_up"], n_impacts=jnp.zeros((), jnp.int32), status=status, n_iterations=s["n"])
+
+
+# -- the newcomer's reference: SciPy on the same equation, sampled at the same step points ---------
+def reference_peak(model: Oscillator, excitation) -> tuple[float, bool]:
+    """max |θ|/α′ at the RK4 step points by DOP853 at rtol 1e-12, and whether it overturned."""
+    integ = model.default_integrator()
+    p, alpha = float(model.block.p_r), float(model.block.alpha_r)
+    zeta = float(model.zeta)
+    h = 2 * math.pi / p / integ.per_period
+    t0, t_stop = float(excitation.t_start), float(excitation.t_end) + 3 * 2 * math.pi / p
+    ug = jax.jit(excitation.__call__)
+    ts = t0 + h * np.arange(1, int(math.ceil((t_stop - t0) / h - 1e-9)) + 1)
+    sol = solve_ivp(lambda t, y: [y[1], -2 * zeta * p * y[1] - p**2 * y[0] - p**2 * float(ug(t)) / G], (t0, ts[-1]),
+                    [0.0, 0.0], method="DOP853", rtol=1e-12, atol=1e-14 * alpha, t_eval=ts)
+    a = np.abs(sol.y[0]) / alpha
+    over = a >= model.threshold
+    return (float(model.threshold) if over.any() else float(a.max())), bool(over.any())
+
+
+BLOCK = jr.Block.from_slenderness(10.0, 0.2)
+OSC = Oscillator(BLOCK, zeta=jnp.asarray(0.05))
+
+
+@pytest.fixture
+def oscillator_kind():
+    """The oscillator as a scenes-file model kind (`zeta` its one parameter), for this test only."""
+    build = lambda block, zeta=0.05: Oscillator(block, zeta=jnp.asarray(zeta, dtype=float))
+    yield jr.register_model_kind("oscillator", build, ("zeta",), "a linear oscillator (test)")
+    MODEL_KINDS.pop("oscillator")
+
+
+@pytest.mark.parametrize("accel_ratio, omega_ratio", [(0.5, 1.0), (0.9, 3.0), (2.0, 1.0)])
+def test_simulate_runs_the_newcomer_and_matches_scipy(accel_ratio, omega_ratio):
+    exc = jr.RickerPulse(accel_ratio * float(BLOCK.uplift_acceleration), omega_ratio * float(BLOCK.p_r))
+    sol = jr.simulate(OSC, exc)
+    ref, over = reference_peak(OSC, exc)
+    assert sol.ok and bool(sol.overturned) == over
+    assert abs(float(sol.max_theta) - ref) < 1e-7 * max(ref, 1e-3)
+    # a result never contradicts its flags
+    assert bool(sol.uplifted) or not bool(sol.overturned)
+    assert (float(sol.max_theta) == OSC.threshold) == bool(sol.overturned)
+
+
+def test_gradient_through_the_newcomer_is_finite_and_right():
+    """Reverse mode through `simulate`'s checkpointed loop: d max θ / d a_p against central differences."""
+    w = 3.0 * float(BLOCK.p_r)
+    f = lambda a: jr.simulate(OSC, jr.RickerPulse(a, w)).max_theta
+    a0, da = 0.6 * float(BLOCK.uplift_acceleration), 1e-5
+    g = float(jax.grad(f)(a0))
+    fd = (float(f(a0 + da)) - float(f(a0 - da))) / (2 * da)
+    assert np.isfinite(g) and abs(g - fd) < 1e-6 * abs(fd)
+
+
+def test_spectrum_of_the_newcomer_equals_simulate_cell_by_cell():
+    """`overturning_spectrum` drives the oscillator in passes of 2, then 4 steps, gathering the
+    running cells between passes: every cell equals its own `simulate`."""
+    wr, ar = np.array([0.5, 1.0, 3.0]), np.array([0.2, 0.8, 1.5, 3.0])
+    spec = jr.overturning_spectrum(OSC, wr, ar, batch_size=8, progress=False)
+    assert spec.ok and not spec.contradictions().any()
+    assert spec.overturned.any() and not spec.overturned.all()
+    for i, a in enumerate(ar):
+        for j, w in enumerate(wr):
+            sol = jr.simulate(OSC, jr.RickerPulse(a * float(BLOCK.uplift_acceleration), w * float(BLOCK.p_r)))
+            assert abs(spec.max_theta[i, j] - float(sol.max_theta)) <= 1e-12
+            assert spec.overturned[i, j] == bool(sol.overturned)
+
+
+def test_run_scenes_runs_the_registered_newcomer(tmp_path, oscillator_kind):
+    """A scenes file names the registered kind; its `zeta` column reaches the model (an empty cell:
+    the column's default, 0.01); a rigid-only column on an oscillator row is refused in one line."""
+    scenes = tmp_path / "scenes.csv"
+    rows = [(10.0, 0.2, 0.5, 1.0, ""), (10.0, 0.2, 2.0, 1.0, "0.2"), (5.0, 0.15, 0.9, 3.0, "")]
+    scenes.write_text("height,tan_alpha,model,accel_ratio,omega_ratio,zeta\n"
+                      + "".join(f"{h},{t},oscillator,{a},{w},{z}\n" for h, t, a, w, z in rows))
+    report = jr.run_scenes(scenes, tmp_path / "out.csv", progress=False)
+    assert report.status_counts == {"ok": 3}
+    got = list(csv.DictReader(open(tmp_path / "out.csv")))
+    for (h, t, a, w, z), rec in zip(rows, got):
+        blk = jr.Block.from_slenderness(h, t)
+        model = Oscillator(blk, zeta=jnp.asarray(float(z) if z else 0.01))
+        sol = jr.simulate(model, jr.RickerPulse(a * float(blk.uplift_acceleration), w * float(blk.p_r)))
+        assert abs(float(rec["max_theta"]) - float(sol.max_theta)) <= 1e-12
+        assert rec["overturned"] == str(int(bool(sol.overturned)))
+    bad = tmp_path / "bad.csv"
+    bad.write_text("height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,oscillator,1,1,0.9\n")
+    with pytest.raises(jr.JaxrockInputError, match="eta.*applies only to model rigid"):
+        jr.run_scenes(bad, tmp_path / "bad_out.csv", progress=False)
