@@ -32,14 +32,21 @@ AUTODIFF_MODES = ("reverse", "forward")
 
 
 class AbstractIntegrator(eqx.Module):
-    """Numerical settings of a model's time integration (tolerances, bounds): a value, with no
-    behaviour of its own. The model pairs it with a scene's structure into an `AbstractStepper`
-    (`AbstractModel.stepper`), which is what every entry point drives."""
+    """Numerical settings of a model's time integration (tolerances, bounds), and the one thing an
+    integrator does: turn a run of a model into an `AbstractStepper` (`stepper`), whose `Schedule`
+    states how batches advance it and what memory a scene holds. A model calls it from its own
+    `AbstractModel.stepper`, after refusing integrators it cannot run and preparing what it
+    computes once (its `system`)."""
+
+    @abc.abstractmethod
+    def stepper(self, model: "AbstractModel", system, save: Save | None = None, t1=None) -> "AbstractStepper":
+        """The run of `model` (prepared as `system`: model-specific, None where the model prepares
+        nothing) with these settings: a summary (`save` None) or a history at `save.ts` up to `t1`."""
 
 
 class AbstractSpringIntegrator(AbstractIntegrator):
     """An integrator of the spring model (`jaxrock.spring`): `SpringIntegrator` (diffrax) or
-    `GeneralizedAlpha`. It turns a run into an `AbstractStepper` from
+    `GeneralizedAlpha`. Its `stepper` is given
 
     - `model`: the `SpringModel` — its `overturn_rotation` (threshold·α′; +inf for a fixed base),
       `run_end(system, excitation, save, t1)` (when the run stops at the latest) and
@@ -50,10 +57,6 @@ class AbstractSpringIntegrator(AbstractIntegrator):
       exact scalar solve, tolerance scales, the initial state, energies and history fields;
     - `save`, `t1`: the output request (None: a summary that stops when the answer is fixed).
     """
-
-    @abc.abstractmethod
-    def stepper(self, model, system, save: Save | None = None, t1=None) -> "AbstractStepper":
-        """The run of `model` (prepared as `system`) as a stepper."""
 
 
 class Schedule(NamedTuple):

@@ -85,6 +85,10 @@ class EventIntegrator(AbstractIntegrator):
     def __check_init__(self):
         check_autodiff(self.autodiff)
 
+    def stepper(self, model: "RigidModel", system=None, save: Save | None = None, t1=None) -> "RigidStepper":
+        """`AbstractIntegrator.stepper`: the segment loop, one segment or window per step."""
+        return RigidStepper(model, self, save, t1)
+
 
 class RigidModel(AbstractModel):
     """Housner's rigid rocking block (eq. 2), or a rigid column on an extended rigid base (eq. 22).
@@ -139,7 +143,7 @@ class RigidModel(AbstractModel):
     def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> "RigidStepper":
         if not isinstance(integrator, EventIntegrator):
             raise JaxrockInputError(f"RigidModel needs an EventIntegrator, got {type(integrator).__name__}")
-        return RigidStepper(self, integrator, save, t1)
+        return integrator.stepper(self, None, save, t1)  # the rigid model prepares nothing
 
 
 class _Carry(eqx.Module):

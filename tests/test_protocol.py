@@ -36,6 +36,11 @@ class RK4(jr.AbstractIntegrator):
     substeps: int = eqx.field(static=True, default=8)
     max_steps: int = eqx.field(static=True, default=4096)
 
+    def stepper(self, model, system=None, save=None, t1=None):
+        if save is not None:
+            raise jr.JaxrockInputError("the oscillator gives summaries only")
+        return OscillatorStepper(model, self)
+
 
 class Oscillator(jr.AbstractModel):
     block: jr.Block
@@ -50,9 +55,9 @@ class Oscillator(jr.AbstractModel):
         return ()
 
     def stepper(self, integrator, save=None, t1=None):
-        if save is not None:
-            raise jr.JaxrockInputError("the oscillator gives summaries only")
-        return OscillatorStepper(self, integrator)
+        if not isinstance(integrator, RK4):
+            raise jr.JaxrockInputError(f"the oscillator needs RK4, got {type(integrator).__name__}")
+        return integrator.stepper(self, None, save, t1)
 
     def rhs(self, t, y, excitation):
         p = self.block.p_r
