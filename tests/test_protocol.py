@@ -214,3 +214,14 @@ def test_run_scenes_runs_the_registered_newcomer(tmp_path, oscillator_kind):
     bad.write_text("height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,oscillator,1,1,0.9\n")
     with pytest.raises(jr.JaxrockInputError, match="eta.*applies only to model rigid"):
         jr.run_scenes(bad, tmp_path / "bad_out.csv", progress=False)
+
+
+@pytest.mark.parametrize("model, integrator, needs", [
+    (jr.RigidModel(BLOCK), jr.GeneralizedAlpha(), "RigidModel needs an EventIntegrator"),
+    (jr.SpringModel(BLOCK), jr.EventIntegrator(), "SpringModel needs a SpringIntegrator or GeneralizedAlpha"),
+    (OSC, jr.EventIntegrator(), "the oscillator needs RK4"),
+])
+def test_a_model_refuses_an_integrator_it_cannot_run(model, integrator, needs):
+    """While tracing, before any compilation: one line naming what the model needs."""
+    with pytest.raises(jr.JaxrockInputError, match=needs):
+        jr.simulate(model, jr.RickerPulse(3.0, 6.0), integrator=integrator)
