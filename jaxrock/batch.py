@@ -14,7 +14,7 @@ first scene after the header). Columns:
 | `tan_alpha` | – | slenderness tanα = b/h | (0, 1); give it or `width` |
 | `width` | m | full width 2b (instead of `tan_alpha`) | > 0, width/height < 1 |
 | `tan_alpha_base` | – | extended rigid base tanα′ = b′/h (paper section 5) | [tanα, 1); default: no base |
-| `model` | – | `rigid` (RM), `spring` (quasi-rigid SM with added masses), `spring-flexible` (SM, elastic column) | default `rigid` |
+| `model` | – | `rigid` (RM), `spring` (quasi-rigid SM with added masses), `spring-flexible` (SM, elastic column), or a kind registered with `jaxrock.register_model_kind` | default `rigid` |
 | `pulse` | – | `symmetric` / `antisymmetric` Ricker pulse, `elcentro` (the packaged El Centro 1940 NS), or a record file path (`.AT2` or two-column text; relative to the scenes file, else to the working directory) | default `symmetric` |
 | `a_p` | m/s² | pulse amplitude (any sign, ≠ 0) | pulses: give it or `accel_ratio` |
 | `accel_ratio` | – | a_p/(g tanα′) | ≠ 0 |
