@@ -267,9 +267,15 @@ def simulate(
 def _run(model, excitation, integrator, save, t1):
     # Compiled once per structure (model kind, mesh, save request): repeated calls with new
     # numbers reuse it. Composes with an outer jit, vmap and grad.
-    ok = within_limits(scene_limits(model, excitation))
-    model, excitation = _neutral(model, ok), _neutral(excitation, ok)
+    model, excitation, ok = guard_scene(model, excitation)
     return flag_invalid(model.stepper(integrator, save, t1).solve(excitation), ok)
+
+
+def guard_scene(model: AbstractModel, excitation: AbstractExcitation):
+    """(model, excitation, ok): `ok` whether every parameter is within its limits; where not, the
+    quiet scene's values in their place (`flag_invalid` then marks the result)."""
+    ok = within_limits(scene_limits(model, excitation))
+    return _neutral(model, ok), _neutral(excitation, ok), ok
 
 
 # A valid, quiet scene (2h = 10 m, tanα = 0.2 at rest under 1 m/s², below its uplift at 1.96 m/s²):

@@ -468,10 +468,10 @@ def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, 
     )
 
 
-def _scene(block: Block, eta=None) -> RigidModel:
+def _scenes_file_model(block: Block, eta=None) -> RigidModel:
     """A scenes file's rigid model: η always an array (the block's η′ by default), so that rows
     with and without `eta` share one batch."""
     return RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
 
 
-register_model_kind("rigid", _scene, ("eta",), "Housner's rigid block (RM)")
+register_model_kind("rigid", _scenes_file_model, ("eta",), "Housner's rigid block (RM)")

@@ -27,7 +27,7 @@ from ._files import exclusive, write_atomically
 from ._validate import JaxrockInputError, check_grid
 from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
 from .geometry import G
-from .model import AbstractIntegrator, AbstractModel, AbstractStepper
+from .model import AbstractIntegrator, AbstractModel, AbstractStepper, flag_invalid, guard_scene
 from .results import STATUS_NAMES, Solution
 
 PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}
@@ -157,6 +157,23 @@ def _vmap(fn, batched: bool):
 
 
 @eqx.filter_jit
+def _guard(model, exc, batched):
+    """Per scene: its values where within their limits, else the quiet scene's, and whether they
+    were (as `simulate`: a batch built under vmap cannot be refused at construction). A model
+    without a batch axis was checked when it was built and is returned as it is."""
+
+    def one(m, e):
+        m, e, ok = guard_scene(m, e)
+        return (m if batched else None), e, ok
+
+    m, e, ok = _vmap(one, batched)(model, exc)
+    return (m if batched else model), e, ok
+
+
+_flag = eqx.filter_jit(eqx.filter_vmap(flag_invalid))  # `flag_invalid`, scene by scene
+
+
+@eqx.filter_jit
 def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_batched: bool = False) -> AbstractStepper:
     """The summary stepper of `model` (of each model, vmapped, when `model_batched`): what a model
     prepares once (mass matrices, tangents, preloads) is computed once for the whole batch."""
@@ -235,12 +252,16 @@ def run_batch(
     """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
     and so does `model` when `model_batched` (one model per scene; else one model for all).
     Driven through the model's `AbstractStepper`: in passes with the running cells gathered between
-    them when its `schedule` has passes, else as one vmapped `solve`."""
+    them when its `schedule` has passes, else as one vmapped `solve`. A scene with a parameter
+    outside its limits comes back `Status.invalid_input` with NaN numbers, as from `simulate`."""
     integ = model.default_integrator() if integrator is None else integrator
+    model, excitations, ok = _guard(model, excitations, model_batched)
     stepper = make_stepper(model, integ, model_batched)
     if stepper.schedule.passes:
-        return _compacted(stepper, excitations, model_batched)
-    return _solve(stepper, excitations, model_batched)
+        sol = _compacted(stepper, excitations, model_batched)
+    else:
+        sol = _solve(stepper, excitations, model_batched)
+    return _flag(sol, ok)
 
 
 def _pulse_class(pulse):
