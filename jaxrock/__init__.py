@@ -63,13 +63,13 @@ from .batch import read_scenes, run_scenes
 
 __all__ += ["read_scenes", "run_scenes"]
 
-from .generalized_alpha import GeneralizedAlpha
-from .backbone import AbstractBackbone, Bilinear, Tanh
-from .spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17, first_period_eq21, pushover_eq9
+from .spring import (DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, Bilinear, Column, GeneralizedAlpha, SpringIntegrator,
+                     SpringModel, SpringSystem, Tanh, cbar_eq17, first_period_eq21, pushover_eq9)
 from .calibration import CalibrationResult, calibrate_cbar, calibration_report, energy_ratio, energy_ratio_grid, fit_power_law, rm_target
 
 __all__ += [
     "SpringModel",
+    "SpringSystem",
     "Column",
     "SpringIntegrator",
     "GeneralizedAlpha",

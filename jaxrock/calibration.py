@@ -128,7 +128,7 @@ def free_cycle(
     if integrator is None:
         integrator = default_integrator(model)
     check_range("theta0_over_alpha", theta0_over_alpha, 0.0, 1.0, lo_open=True, hi_open=True)
-    mech = model.mechanics()
+    mech = model.system()
     alpha = model.block.alpha_r
     x = jnp.asarray(theta0_over_alpha, dtype=float)
     theta0 = x * alpha
@@ -193,7 +193,7 @@ class SpringFamily(eqx.Module):
     Everything else is fixed: `height` (2h [m]; r_eq² of the quasi-rigid SM is size independent),
     `added_masses`, `tan_alpha_base` (None: plain block; else a fixed extended base tanα′, whose
     η′ is then the target), `column` (None: quasi-rigid one-DOF SM; or a `Column`), `backbone`
-    (the spring's, `jaxrock.backbone`; the smooth tanh by default: gradients through the bilinear
+    (the spring's, `jaxrock.spring.base_spring`; the smooth tanh by default: gradients through the bilinear
     kink are not reliable, see `jaxrock.spring.DEFAULT_SMOOTHING`), `smoothing` (θs/α′), `zeta`,
     `n_elements`. Hashable by value, so compiled calibrations are reused.
     """

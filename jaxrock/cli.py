@@ -285,7 +285,7 @@ def _integrator(model: ModelKind, tol: Optional[float]):
     if tol is None:
         return None
     from ._validate import JaxrockInputError
-    from .generalized_alpha import GeneralizedAlpha
+    from .spring import GeneralizedAlpha
 
     if model == ModelKind.rigid:
         raise JaxrockInputError("--tol selects the spring model's generalized-α integrator; the rigid model takes none")

@@ -48,13 +48,13 @@ class AbstractSpringIntegrator(AbstractIntegrator):
     """An integrator of the spring model (`jaxrock.spring`): `SpringIntegrator` (diffrax) or
     `GeneralizedAlpha`. Its `stepper` is given
 
-    - `model`: the `SpringModel` — its `overturn_rotation` (threshold·α′; +inf for a fixed base),
-      `run_end(system, excitation, save, t1)` (when the run stops at the latest) and
-      `solution(peak, overturned, t_overturn, t_uplift, status, ts, history, n_iterations)` (the
-      `Solution` from a run's raw summary, |θ| in rad);
-    - `system`: the model's prepared mechanics (`SpringModel.mechanics()`), built once per model:
-      mass matrix, forces (`forces`, `forces_without_spring`), tangents at rest, the backbone's
-      exact scalar solve, tolerance scales, the initial state, energies and history fields;
+    - `model`: the `SpringModel` — `run_end(system, excitation, save, t1)` (when the run stops at
+      the latest) and `watch(system)` (`jaxrock.bookkeeping.Watch`: the levels a run is watched
+      against — overturning, uplift — and its `Solution` from the run's `Record`);
+    - `system`: the model's assembled `SpringSystem` (`SpringModel.system()`), built once per
+      model: mass matrix, forces (`forces`, `forces_without_spring`), tangents at rest, the
+      backbone's exact scalar solve, tolerance scales, the initial state, energies, history fields
+      and the summary's stop (`settled`);
     - `save`, `t1`: the output request (None: a summary that stops when the answer is fixed).
     """
 
@@ -152,6 +152,13 @@ class AbstractStepper(eqx.Module):
 def check_autodiff(autodiff: str):
     if autodiff not in AUTODIFF_MODES:
         raise JaxrockInputError(f"autodiff = {autodiff!r}; valid: {AUTODIFF_MODES}")
+
+
+def diffrax_status(result) -> Status:
+    """A diffrax solve's `RESULTS` as a `Status` (an event that ended the solve is success)."""
+    ok = (result == diffrax.RESULTS.successful) | (result == diffrax.RESULTS.event_occurred)
+    steps = result == diffrax.RESULTS.max_steps_reached
+    return Status.where(ok, Status.ok, Status.where(steps, Status.max_steps, Status.solver_failed))
 
 
 def diffrax_adjoint(autodiff: str, checkpoints: int | None = None) -> diffrax.AbstractAdjoint:

@@ -39,10 +39,11 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ._rootfind import SafeNewton
+from .bookkeeping import Record, Watch
 from ._validate import JaxrockInputError, Limit, check_limits
 from .excitation import AbstractExcitation
 from .geometry import G, Block
-from .model import AbstractIntegrator, AbstractModel, AbstractStepper, Schedule, check_autodiff, diffrax_adjoint, register_model_kind
+from .model import AbstractIntegrator, AbstractModel, AbstractStepper, Schedule, check_autodiff, diffrax_adjoint, diffrax_status, register_model_kind
 from .results import Save, Solution, Status
 
 _REST, _ROCKING, _OVERTURNED = 0, 1, 2
@@ -128,8 +129,8 @@ class RigidModel(AbstractModel):
         phi = side * a - theta
         return -(p**2) * (jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
 
-    def free_peak(self, theta, omega, side):
-        """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side` (see module doc)."""
+    def _free(self, theta, omega, side):
+        """(overturns, next peak |θ| [rad]) of free rocking from (θ, θ̇) on `side` (module doc)."""
         a, p, eta = self.block.alpha_r, self.block.p_r, self.restitution
         energy = 0.5 * omega**2 + p**2 * (jnp.cos(a - jnp.abs(theta)) - jnp.cos(a))
         energy = jnp.where(side * omega < 0, eta**2 * energy, energy)
@@ -137,8 +138,24 @@ class RigidModel(AbstractModel):
         over = c >= jnp.cos((1 - self.threshold) * a)
         # double where: the masked branch must not see c ≥ 1, where arccos′ = −∞ and its zero
         # cotangent would become 0·∞ = NaN under `grad`; cos α is a safe stand-in (peak 0)
-        peak = (a - jnp.arccos(jnp.where(over, jnp.cos(a), jnp.maximum(c, -1.0)))) / a
-        return jnp.where(over, self.threshold, peak)
+        return over, a - jnp.arccos(jnp.where(over, jnp.cos(a), jnp.maximum(c, -1.0)))
+
+    def free_peak(self, theta, omega, side):
+        """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side` (see module doc):
+        the threshold if it overturns."""
+        over, peak = self._free(theta, omega, side)
+        return jnp.where(over, self.threshold, peak / self.block.alpha_r)
+
+    def free_rotation(self, theta, omega, side):
+        """The same next peak as a rotation |θ| [rad] (threshold·α′ if it overturns)."""
+        over, peak = self._free(theta, omega, side)
+        return jnp.where(over, self.threshold * self.block.alpha_r, peak)
+
+    def watch(self, system=None) -> Watch:
+        """The levels a run is watched against (`jaxrock.bookkeeping`): overturning at threshold·α′;
+        uplift as soon as |θ| > 0 (the block leaves rest when |üg| > g tanα′)."""
+        alpha = self.block.alpha_r
+        return Watch(alpha=alpha, threshold=self.threshold, overturn=self.threshold * alpha, uplift=jnp.zeros_like(alpha))
 
     def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> "RigidStepper":
         if not isinstance(integrator, EventIntegrator):
@@ -152,21 +169,13 @@ class _Carry(eqx.Module):
     omega: Array
     side: Array
     mode: Array
-    peak: Array  # max |θ|/α′ so far
+    rec: Record  # peak, uplift, overturn so far
     n_impacts: Array
     n_segments: Array
     dt_next: Array  # > 0: continue the current segment with this step (chunked); 0: fresh segment
     status: Status
-    t_overturn: Array
-    t_uplift: Array
     finished: Array
     hist: dict | None
-
-
-def _event_status(result) -> Status:
-    ok = (result == diffrax.RESULTS.successful) | (result == diffrax.RESULTS.event_occurred)
-    steps = result == diffrax.RESULTS.max_steps_reached
-    return Status.where(ok, Status.ok, Status.where(steps, Status.max_steps, Status.solver_failed))
 
 
 class _Scene(NamedTuple):
@@ -240,13 +249,11 @@ class RigidStepper(AbstractStepper):
             omega=zero,
             side=jnp.ones((), dtype),
             mode=jnp.asarray(_REST),
-            peak=zero,
+            rec=Record.start(),
             n_impacts=jnp.zeros((), jnp.int32),
             n_segments=jnp.zeros((), jnp.int32),
             dt_next=zero,
             status=Status.ok,
-            t_overturn=jnp.asarray(jnp.inf, dtype),
-            t_uplift=jnp.asarray(jnp.inf, dtype),
             finished=jnp.asarray(False),
             hist=hist0,
         )
@@ -293,13 +300,13 @@ class RigidStepper(AbstractStepper):
             inwin = (save.ts >= c.t) & (save.ts < upto)
             hist = {k: jnp.where(inwin, 0.0, v) for k, v in hist.items()}
         return eqx.tree_at(
-            lambda x: (x.t, x.side, x.mode, x.t_uplift, x.finished, x.hist),
+            lambda x: (x.t, x.side, x.mode, x.rec, x.finished, x.hist),
             c,
             (
                 t_new,
                 jnp.where(starts, side, c.side),
                 jnp.where(starts, _ROCKING, _REST),
-                jnp.where(starts, jnp.minimum(c.t_uplift, t_up), c.t_uplift),
+                c.rec.saw_uplift(starts, t_up),
                 ~starts,
                 hist,
             ),
@@ -358,7 +365,7 @@ class RigidStepper(AbstractStepper):
         chunked = is_rocking & ~(hit_impact | hit_apex | hit_over) & (tf < t_seg)
         n_acc = jnp.maximum(sol.stats["num_accepted_steps"], 1)
         dt_next = jnp.where(chunked & ~back_to_rest, jnp.maximum((tf - c.t) / n_acc, dt_min), 0.0)
-        status = _event_status(sol.result)
+        status = diffrax_status(sol.result)
         missed = is_rocking & ~hit_impact & ~back_to_rest & (c.side * thf < -1e-6 * alpha)
         status = Status.where(missed, Status.missed_impact, status)
         status = Status.where(is_rocking, status, Status.ok)
@@ -385,8 +392,7 @@ class RigidStepper(AbstractStepper):
         t_zeno = 2 * v / (1 - eta**2 + tiny) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
         zeno = hit_impact & both & ((t_zeno * p <= integ.zeno_time) | (v <= integ.zeno_velocity * p * alpha))
 
-        peak = jnp.where((hit_apex | (not summary_only)) & ~back_to_rest, jnp.maximum(c.peak, jnp.abs(thf) / alpha), c.peak)
-        peak = jnp.where(hit_over, thr, peak)
+        rec = c.rec.saw_peak(is_rocking & (hit_apex | (not summary_only)) & ~back_to_rest, thf).saw_overturn(hit_over, tf)
         theta_new = jnp.where(hit_impact | back_to_rest, 0.0, thf)
         omega_new = jnp.where(hit_impact, jnp.where(zeno, 0.0, omega_imp), jnp.where(hit_apex | back_to_rest, 0.0, omf))
         side_new = jnp.where(hit_impact, side_imp, c.side)
@@ -400,7 +406,7 @@ class RigidStepper(AbstractStepper):
         free_overturns = summary_only & (c.t < t_end) & (tf >= t_end) & (model.free_peak(thf, omf, c.side) >= thr)
         finished = c.finished | hit_over | bad | (seg_done & ~free_overturns & ~back_to_rest)
         out = eqx.tree_at(
-            lambda x: (x.t, x.theta, x.omega, x.side, x.mode, x.peak, x.n_impacts, x.dt_next, x.status, x.t_overturn, x.finished, x.hist),
+            lambda x: (x.t, x.theta, x.omega, x.side, x.mode, x.rec, x.n_impacts, x.dt_next, x.status, x.finished, x.hist),
             c,
             (
                 jnp.where(is_rocking, t_new, c.t),
@@ -408,11 +414,10 @@ class RigidStepper(AbstractStepper):
                 jnp.where(is_rocking, omega_new, c.omega),
                 jnp.where(is_rocking, side_new, c.side),
                 jnp.where(is_rocking, mode, c.mode),
-                jnp.where(is_rocking, peak, c.peak),
+                rec,
                 c.n_impacts + hit_impact.astype(c.n_impacts.dtype),
                 jnp.where(is_rocking, dt_next, c.dt_next),
                 Status.where(is_rocking, status, c.status),
-                jnp.where(hit_over, tf, c.t_overturn),
                 jnp.where(is_rocking, finished, c.finished),
                 hist,
             ),
@@ -448,24 +453,13 @@ class RigidStepper(AbstractStepper):
 
 
 def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, save: Save | None) -> Solution:
-    peak = c.peak
-    overturned = c.mode == _OVERTURNED
+    rec = c.rec
     if summary_only:
         # Free motion after the excitation: the next peak is the last one that matters.
         still = (c.mode == _ROCKING) & (status == Status.ok)
-        peak = jnp.where(still, jnp.maximum(peak, model.free_peak(c.theta, c.omega, c.side)), peak)
-    return Solution(
-        max_theta=peak,
-        overturned=overturned,
-        t_overturn=c.t_overturn,
-        uplifted=jnp.isfinite(c.t_uplift),
-        t_uplift=c.t_uplift,
-        n_impacts=c.n_impacts,
-        status=status,
-        ts=None if summary_only else save.ts,
-        history=c.hist,
-        n_iterations=c.n_segments,
-    )
+        rec = rec.saw_peak(still, model.free_rotation(c.theta, c.omega, c.side))
+    return model.watch().solution(rec, status, n_impacts=c.n_impacts, ts=None if summary_only else save.ts,
+                                  history=c.hist, n_iterations=c.n_segments)
 
 
 def _scenes_file_model(block: Block, eta=None) -> RigidModel:

@@ -1,4 +1,4 @@
-"""The spring's backbones (`jaxrock.backbone`): closed forms, the exact scalar solve of the implicit
+"""The spring's backbones (`jaxrock.spring.base_spring`): closed forms, the exact scalar solve of the implicit
 step, the quasi-static pre-yield rotation, the rigid-plastic limit (uplift at g tanα, first-order
 convergence of the bilinear backbone) and both integrators on the kinked backbone.
 
@@ -15,7 +15,7 @@ import pytest
 
 from jaxrock import G, AntisymmetricRickerPulse, Block, Column, GeneralizedAlpha, RickerPulse, RigidModel, SpringIntegrator, SpringModel, Status, simulate
 from jaxrock._validate import JaxrockInputError
-from jaxrock.backbone import Bilinear, Tanh, as_backbone
+from jaxrock.spring.base_spring import Bilinear, Tanh, as_backbone
 
 BACKBONES = [Bilinear(), Tanh()]
 TSIT5 = SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5")

@@ -1,4 +1,4 @@
-"""Physics tests of the adaptive generalized-α integrator (`jaxrock.generalized_alpha`) on the
+"""Physics tests of the adaptive generalized-α integrator (`jaxrock.spring.generalized_alpha`) on the
 spring model: agreement with the diffrax pipelines (Tsit5 for the one-DOF quasi-rigid SM,
 Kvaerno5 for flexible columns), convergence under tolerance refinement, energy balance and
 conservation, the fixed base against closed forms, forward-mode derivatives against finite
@@ -304,7 +304,7 @@ def test_fixed_base_resonant_pulse_matches_kvaerno5():
     drift and base moment, GA default vs Kvaerno5 1e-6, and the whole histories.
 
     Measured: peaks 0.04 % apart, histories 0.12 % of the peak. (Before the fixed base's tolerance
-    was scaled by the column's static drift, `_Mechanics.atol_scale`, instead of the rocking
+    was scaled by the column's static drift, `SpringSystem.atol_scale`, instead of the rocking
     displacement 2h α′ = 5 m, 60× the 8 cm drift: peaks 0.66 %, histories 1.5 %.) Kvaerno5 1e-6 vs
     1e-8: 3e-6. Bounds 0.2 % (peaks) and 0.5 % (histories)."""
     blk = FLEX_BLOCK

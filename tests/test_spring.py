@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import jaxrock
-from jaxrock import beam
+from jaxrock.spring import beam
 from jaxrock._validate import JaxrockInputError
 from jaxrock.excitation import RickerPulse
 from jaxrock.geometry import G, Block
@@ -175,7 +175,7 @@ def test_kinematics_eq5_eq7_flexible_rigid_rotation():
 def test_preload_is_static_equilibrium():
     blk = Block.from_size(50.0, 5.0)
     model = SpringModel(blk, Column.concrete())
-    mech = eqx.filter_jit(model.mechanics)()
+    mech = eqx.filter_jit(model.system)()
     y0 = eqx.filter_jit(mech.initial_state)()
     dy = eqx.filter_jit(mech.vector_field)(-100.0, y0, RickerPulse(1.0, 1.0))
     assert float(jnp.max(jnp.abs(dy))) < 1e-6  # m/s², i.e. < 1e-7 g

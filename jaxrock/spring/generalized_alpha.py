@@ -2,7 +2,7 @@
 
 The structural-dynamics scheme the issue asks to weigh against diffrax's ESDIRK solvers (chosen
 by the work–precision study in `benchmarks/bench_spring.py`). For ``M q̈ = f(t, q, q̇)`` with the
-spring's elastic moment ``M(θ)`` (`jaxrock.backbone`) on the base rotation θ = q₀:
+spring's elastic moment ``M(θ)`` (`jaxrock.spring.base_spring`) on the base rotation θ = q₀:
 
     (1 − αm) M a₁ + αm M a₀ = (1 − αf) f(t₁, q₁, v₁) + αf f(t₀, q₀, v₀),
     q₁ = q₀ + dt v₀ + dt² ((½ − β) a₀ + β a₁),   v₁ = v₀ + dt ((1 − γ) a₀ + γ a₁),
@@ -18,7 +18,7 @@ Newton on q₁ with three structural shortcuts, each exact or converging to the 
   (`AbstractBackbone.solve`) — so the pre-yield branch (stiffness My/θs, up to 10⁶ × the
   rocking stiffness) never makes the iteration diverge, however large the step;
 - the rest of the tangent is the rest state's (``K₀ + γ/(β dt) C₀ + (1−αm)/((1−αf) β dt²) M``),
-  rotated rigidly to the current base rotation (``T(θ) K T(θ)ᵀ``, `_Mechanics.rotate`: exact for
+  rotated rigidly to the current base rotation (``T(θ) K T(θ)ᵀ``, `SpringSystem.rotate`: exact for
   a rigidly rotated column, as the strain energy is rotation invariant): a quasi-Newton iteration
   on the exact residual, which converges to the exact implicit step;
 - step sizes come from a ladder dt_k = dt_top / 2^k (k < `levels`), whose tangent inverses are
@@ -45,13 +45,14 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from . import _linalg
-from ._peaks import hermite_crossing, hermite_peak
-from ._validate import JaxrockInputError
 from jaxtyping import Array
 
-from .model import AbstractModel, AbstractSpringIntegrator, AbstractStepper, Schedule
-from .results import Save, Solution, Status
+from .. import _linalg
+from .._validate import JaxrockInputError
+from ..bookkeeping import Record
+from ..model import AbstractModel, AbstractSpringIntegrator, AbstractStepper, Schedule
+from ..results import Save, Solution, Status
+from .system import SpringSystem
 
 
 class GeneralizedAlpha(AbstractSpringIntegrator):
@@ -111,13 +112,13 @@ class GeneralizedAlphaStepper(AbstractStepper):
 
     Runs from the excitation's start to `SpringModel.run_end` or earlier: overturned at
     |θ| ≥ threshold·α′; or, for a summary, settled after the excitation (mechanical energy below
-    `system.settle_margin` × the rigid potential at the peak so far). The peak max |θ| comes from
-    each step's cubic Hermite interpolant, the uplift time from the first |θ| beyond the pre-yield
-    band."""
+    `SpringSystem.settled`). Each accepted step is recorded from its ends
+    (`jaxrock.bookkeeping.Watch.steps`: the peak and the crossings on its cubic Hermite
+    interpolant)."""
 
     integrator: GeneralizedAlpha
     model: AbstractModel  # the SpringModel
-    system: eqx.Module  # its prepared mechanics (`SpringModel.mechanics`)
+    system: SpringSystem
     save: Save | None
     t1: Array | None
 
@@ -149,16 +150,16 @@ class GeneralizedAlphaStepper(AbstractStepper):
 
     def finish(self, exc, c) -> Solution:
         out = self._loop(exc)[2](c)
-        return self.model.solution(out["peak"], out["overturned"], out["t_overturn"], out["t_up"], out["status"],
-                                   None if self.save is None else self.save.ts, out["history"], out["steps"])
+        return self.model.watch(self.system).solution(out["record"], out["status"], ts=None if self.save is None else self.save.ts,
+                                                      history=out["history"], n_iterations=out["steps"])
 
     def _loop(self, excitation):
         """(initial, body, result) of the step loop on `excitation`: closures over the scene's
         constants (cheap: the ladder's tangent inverses are computed in `initial` only)."""
         ig, mech, model = self.integrator, self.system, self.model
-        thr = model.overturn_rotation
+        watch = model.watch(mech)
         t_stop = model.run_end(mech, excitation, self.save, self.t1)
-        settle_margin = mech.settle_margin if self.save is None else None
+        summary = self.save is None
         save_ts = None if self.save is None else self.save.ts
         fields = () if self.save is None else self.save.fields
         n_ts = 0 if save_ts is None else save_ts.shape[0]
@@ -227,8 +228,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 n=jnp.zeros((), stride.dtype), k=k_start, t=t0, q=q0, v=v0, a=a0, f=f0_tot,
                 ew=jnp.zeros(2, dtype),  # [dissipated, input] work
                 fd=f0_damp, fe=f0_ext,
-                peak=jnp.abs(q0[0]), t_up=jnp.asarray(jnp.inf, dtype), over=jnp.asarray(False),
-                t_over=jnp.asarray(jnp.inf, dtype), done=jnp.asarray(False), failed=jnp.asarray(False),
+                rec=Record.start(q0[0]), done=jnp.asarray(False), failed=jnp.asarray(False),
                 steps=jnp.zeros((), jnp.int32), hist=hist0, ptr=jnp.sum(save_ts <= t0) if save_ts is not None else jnp.zeros((), jnp.int32),
                 Kinv=Kinv,
             )
@@ -298,8 +298,6 @@ class GeneralizedAlphaStepper(AbstractStepper):
             err = jnp.where(conv & jnp.isfinite(err), err, jnp.inf)
             return dict(n1=n1, t1=t1, q1=q1, v1=v1, a1=a1 * free, f1=f1_tot, fe1=fe1, fd1=fd1, err=err, dt=dt)
 
-        theta_up = mech.theta_up
-
         def body(c):
             s = step(c)
             k = c["k"]
@@ -320,23 +318,16 @@ class GeneralizedAlphaStepper(AbstractStepper):
             t, t1 = c["t"], s["t1"]
             th0, th1 = c["q"][0], s["q1"][0]
             om0, om1 = c["v"][0], s["v1"][0]
-            pk = hermite_peak(jnp.stack([t, t1]), jnp.stack([th0, th1]), jnp.stack([om0, om1]))
-            peak = jnp.maximum(c["peak"], pk)
-            a1 = jnp.abs(th1)
-            crossing = lambda level: hermite_crossing(t, t1, th0, th1, om0, om1, level)  # |θ| = level
-            over = pk >= thr
-            t_over = crossing(thr)
-            up_now = jnp.isinf(c["t_up"]) & (a1 > theta_up)
-            t_up = jnp.where(up_now, crossing(theta_up), c["t_up"])
+            rec = c["rec"].merge(watch.steps(jnp.stack([t, t1]), jnp.stack([th0, th1]), jnp.stack([om0, om1])))
             dt = s["dt"]
             ew = c["ew"] + 0.5 * dt * jnp.stack([c["v"] @ c["fd"] + s["v1"] @ s["fd1"], c["v"] @ c["fe"] + s["v1"] @ s["fe1"]])
-            finished = over | (t1 >= t_stop)
-            if settle_margin is not None:
+            finished = rec.overturned | (t1 >= t_stop)
+            if summary:
                 energy = mech.kinetic(s["v1"]) + mech.potential(s["q1"])
-                finished = finished | ((t1 >= t_end) & (energy < settle_margin * mech.rigid_potential(peak)))
+                finished = finished | ((t1 >= t_end) & mech.settled(energy, rec.peak))
             new = dict(
                 n=s["n1"], k=k_new, t=t1, q=s["q1"], v=s["v1"], a=s["a1"], f=s["f1"], ew=ew, fd=s["fd1"], fe=s["fe1"],
-                peak=peak, t_up=t_up, over=over, t_over=jnp.where(over, t_over, jnp.inf), done=finished,
+                rec=rec, done=finished,
                 failed=jnp.asarray(False), steps=c["steps"] + 1, hist=c["hist"], ptr=c["ptr"], Kinv=c["Kinv"],
             )
             if save_ts is not None:
@@ -349,14 +340,11 @@ class GeneralizedAlphaStepper(AbstractStepper):
 
         def result(c):
             status = Status.where(
-                c["failed"] | ~jnp.isfinite(c["peak"]),
+                c["failed"] | ~jnp.isfinite(c["rec"].peak),
                 Status.solver_failed,
                 Status.where(c["done"], Status.ok, Status.max_steps),
             )
-            return dict(
-                peak=c["peak"], overturned=c["over"], t_overturn=c["t_over"], t_up=c["t_up"], status=status,
-                steps=c["steps"], history=c["hist"],
-            )
+            return dict(record=c["rec"], status=status, steps=c["steps"], history=c["hist"])
 
         return initial, body, result
 

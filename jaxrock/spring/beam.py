@@ -35,8 +35,8 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from . import _linalg
-from .geometry import G
+from .. import _linalg
+from ..geometry import G
 
 
 def n_dof(n: int) -> int:

@@ -1,4 +1,7 @@
-"""Backbones of the base spring: its moment–rotation curve M(θ) (paper section 3, Figure 2 right).
+"""The base spring and its damper (paper section 3, Figure 2 right; eqs. 17–18).
+
+The damper in parallel with the spring: ``c = c̄ m g^0.5 R′^1.5`` (eq. 18, `damper`), c̄ by default
+from eq. 17 (`jaxrock.spring.column.cbar_eq17`). The spring's moment–rotation curve M(θ), its backbone:
 
 The paper's spring is nonlinear *elastic* and rigid-plastic: M = My sign θ once the column
 rocks, unloading along the loading path. A computable spring needs a finite pre-yield stiffness;
@@ -9,8 +12,8 @@ each backbone here has one parameter, the pre-yield rotation ``θs = smoothing �
   rotation θy = θs, then flat at My. Its error against the rigid-plastic limit is of first order
   in θs: at θy = 1e-5 α′ at most 8.3e-4 in max|θ|/α over the 240 scenes of
   `benchmarks/bench_backbone.py` whose limit is settled (2.7e-3 on one near-tie scene; 2.2e-2 at
-  θy = 1e-4 α′). Its kink breaks derivatives through adaptive steps (`jaxrock.spring`'s
-  `DEFAULT_SMOOTHING` note): use it for values, not yet for gradients;
+  θy = 1e-4 α′). Its kink breaks derivatives through adaptive steps (`DEFAULT_SMOOTHING`'s note
+  below): use it for values, not yet for gradients;
 - `Tanh` (the default): ``M = My tanh(θ/θs)``, smooth everywhere, so derivatives through it are
   good; it reaches 99.5 % of My only at 3 θs and its error at equal θs is 9–30× the bilinear's
   (same study: 4.9e-2 quasi-rigid, 3.9e-2 flexible at the default θs = 1e-4 α′).
@@ -18,7 +21,7 @@ each backbone here has one parameter, the pre-yield rotation ``θs = smoothing �
 A backbone is a small, leafless value: structure, not data (its θs is the model's array leaf).
 Each gives the moment, its potential (the forces are its gradient) and the exact solution of the
 scalar spring equation of an implicit step, ``u + k m(u) = r`` in ``u = θ/θs`` with
-``m = M/My`` and ``k ≥ 0`` (`jaxrock.generalized_alpha`): closed form for the bilinear backbone,
+``m = M/My`` and ``k ≥ 0`` (`jaxrock.spring.generalized_alpha`): closed form for the bilinear backbone,
 so its kink never enters a Newton iteration; monotone Newton for tanh.
 """
 
@@ -31,7 +34,28 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from ._validate import JaxrockInputError
+from ..geometry import G
+from .._validate import JaxrockInputError
+
+# Backbone and θs/α′: the study of benchmarks/bench_backbone.py (its results file): 192 quasi-rigid
+# and 48 flexible (concrete, 10 elements) scenes, tanα 0.05–0.35, 2h 1–50 m, ω_p/p′ 1–15,
+# a_p/(g tanα) 1–8, both pulses; error of max|θ|/α against the sharp limit (bilinear, θy = 1e-6 α).
+# This default, tanh at θs = 1e-4 α, leaves up to 4.9e-2 (quasi-rigid) and 3.9e-2 (flexible), median
+# 1.7e-4 and 7.6e-4, the largest on antisymmetric pulses near a_p/(g tanα) ≈ 4, ω_p/p′ ≈ 4. The
+# bilinear backbone at θy = 1e-5 α (`backbone="bilinear", smoothing=1e-5`) is within 8.3e-4
+# wherever the limit is settled, for 15 % more cost: use it for values. It stays off by default
+# because its kink breaks derivatives through the adaptive steps (`bench_backbone.py --part
+# gradients`): calibration's reverse ∂r_eq²/∂c̄ (Tsit5 1e-10) came out −3.43 against finite
+# differences' −1.988, and d max θ / d ln a_p was 33 % (median) from central differences with
+# generalized-α's jacfwd, 2.7 % with Tsit5's forward mode (tanh: 0.13 % and 3e-6).
+DEFAULT_SMOOTHING = 1e-4
+DEFAULT_BACKBONE = "tanh"
+
+
+def damper(cbar, m, R):
+    """Eq. 18: the damper coefficient c = c̄ m g^0.5 R^1.5 [N·m·s] (R: the rocking R′)."""
+    return cbar * m * math.sqrt(G) * R**1.5
+
 
 _U_RTOL = 1e-10  # tanh's scalar solve: Newton stops at |Δu| ≤ 1e-10 (|u| + 1)
 

@@ -1,0 +1,288 @@
+"""The spring model (`SpringModel`): the paper's parameters of one scene (geometry, column, damper,
+backbone, smoothing, damping, added masses) as a value, with its default integrator, its
+discretised column's period and Rayleigh coefficients, its static pushover, and the levels its runs
+are watched against. What a run integrates is its assembled `SpringSystem`
+(`jaxrock.spring.system`); the package docstring (`jaxrock.spring`) describes the model."""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .. import _linalg
+from .._validate import JaxrockInputError, Limit, check_limits
+from ..bookkeeping import Watch
+from ..excitation import AbstractExcitation
+from ..geometry import G, Block
+from ..model import AbstractModel, AbstractSpringIntegrator, register_model_kind
+from . import beam
+from .base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, as_backbone
+from .column import Column, cbar_eq17, pushover_eq9
+from .diffrax_integrator import SpringIntegrator
+from .generalized_alpha import GeneralizedAlpha
+from .system import ENERGY_FIELDS, HISTORY_FIELDS, SpringSystem, assemble
+
+DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA = 30e9, 2500.0, 0.01  # a scenes file's column: concrete (paper sections 4–6)
+QUASI_RIGID_RHO = 2500.0  # kg/m³: mass of the quasi-rigid scene (results do not depend on it)
+
+
+class SpringModel(AbstractModel):
+    """The paper's spring model (SM), quasi-rigid (``column=None``) or flexible.
+
+    Fields (arrays are vmappable/differentiable leaves):
+    - `block`: geometry (`Block`, with `b_base > b` for an extended rigid base, section 5);
+    - `column`: `Column` (E, ρ, optional A, I) or None for the one-DOF quasi-rigid SM;
+    - `added_masses` (static): add ΔI = I′o − (4/3) m h² (SPEC; paper section 3.3);
+    - `cbar`: damper coefficient c̄ (default eq. 17 with α′);
+    - `backbone` (static): the spring's moment–rotation curve, `jaxrock.Bilinear` or
+      `Tanh` (or their names; default `DEFAULT_BACKBONE`);
+    - `smoothing`: θs/α′, the backbone's pre-yield rotation (the bilinear yield rotation θy, or
+      the tanh's θs; default `DEFAULT_SMOOTHING`);
+    - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
+      at the first fixed-base period of the discretised column *with its added rotational masses*
+      (`first_period`; they lengthen it: 2h = 50 m, 2b = 5 m concrete, 10 elements: T₁ = 0.901 s,
+      0.896 s without them, eq. 21 0.893 s);
+    - `n_elements` (static), `fixed_base` (static: base rotation clamped, section 6);
+    - `threshold`: overturned when |θ| ≥ threshold·α′.
+    """
+
+    block: Block
+    column: Column | None
+    cbar: Float[Array, ""]
+    smoothing: Float[Array, ""]
+    zeta: Float[Array, ""]
+    threshold: float
+    backbone: AbstractBackbone = eqx.field(static=True)
+    added_masses: bool = eqx.field(static=True)
+    n_elements: int = eqx.field(static=True)
+    fixed_base: bool = eqx.field(static=True)
+
+    def __init__(
+        self,
+        block: Block,
+        column: Column | None = None,
+        *,
+        added_masses: bool = True,
+        cbar=None,
+        backbone: AbstractBackbone | str = DEFAULT_BACKBONE,
+        smoothing=DEFAULT_SMOOTHING,
+        zeta=0.01,
+        n_elements: int = 10,
+        fixed_base: bool = False,
+        threshold=1.0,
+    ):
+        if not isinstance(block, Block):
+            raise JaxrockInputError(f"block must be a jaxrock.Block, got {type(block).__name__}")
+        if column is not None and not isinstance(column, Column):
+            raise JaxrockInputError(f"column must be a jaxrock Column or None, got {type(column).__name__}")
+        if not isinstance(n_elements, int) or isinstance(n_elements, bool) or n_elements < 1:
+            raise JaxrockInputError(f"n_elements = {n_elements!r}: must be an integer >= 1")
+        self.block = block
+        self.column = column
+        self.added_masses = bool(added_masses)
+        self.cbar = cbar_eq17(block.alpha_r) if cbar is None else jnp.asarray(cbar, dtype=float)
+        self.backbone = as_backbone(backbone)
+        self.smoothing = jnp.asarray(smoothing, dtype=float)
+        self.zeta = jnp.asarray(zeta, dtype=float)
+        self.n_elements = n_elements
+        self.fixed_base = bool(fixed_base)
+        self.threshold = threshold
+        check_limits(self.limits())
+
+    def limits(self) -> tuple[Limit, ...]:
+        column = () if self.column is None else self.column.limits()
+        return (Limit("smoothing (theta_s/alpha)", self.smoothing, 0.0, 1.0, lo_open=True, hi_open=True),
+                Limit("zeta (column damping ratio)", self.zeta, 0.0, math.inf, hi_open=True),
+                Limit("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True),
+                Limit("cbar (damper coefficient)", self.cbar, 0.0, math.inf, hi_open=True), *column)
+
+    # -- AbstractModel --------------------------------------------------------------------------
+    def default_integrator(self) -> "SpringIntegrator | GeneralizedAlpha":
+        """Work–precision choice (measured on 2 CPU cores, vmapped grids, `benchmarks/bench_spring.py`,
+        with the default tanh backbone at θs = 1e-4 α; with the bilinear θy = 1e-5 α, over the 240
+        scenes of `benchmarks/bench_backbone.py`: quasi-rigid Tsit5 5.2 ms/scene; flexible
+        generalized-α 1e-5 10 ms/scene, its total error against the sharp limit 3.1e-3 max, 4e-5
+        median).
+
+        Quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10 (32×32 pulse grid, tanα = 0.2: max error
+        of max|θ|/α 2.4e-8 against Tsit5 at 1e-11, ~1.5–1.9 ms/scene; reverse-mode differentiable,
+        which the calibration of c̄ needs). `GeneralizedAlpha(1e-6, 1e-6)` runs the same grid at
+        0.092 ms/scene with max error 8e-3 (median 1e-4; OpenSeesPy: 19 ms, 1.4e-2): pass it for
+        pulse spectra where that suffices — not for records, whose response hangs on resolving the
+        block's ringing on the stiff pre-yield spring before uplift (README).
+
+        Flexible → `GeneralizedAlpha(1e-5, 1e-5)`, ρ∞ = 0.9 (8×8 grid of 2h = 50 m concrete
+        columns, 10 elements, error against generalized-α at 1e-9, itself 4e-7 from Kvaerno5 at
+        1e-7): 4.2 ms/scene, max error 2.9e-4 (median 4e-5); at 1e-4: 2.8 ms, 2.1e-3; at 1e-6:
+        7.8 ms, 1.5e-4 (OpenSeesPy at T/400: 157 ms, 6.9e-3). ρ∞ = 1 (the trapezoidal rule)
+        leaves the spring's impacts ringing in the stiff axial modes: 30–100× more steps; ρ∞ =
+        0.8, 0.7, 0.5 cost 5–30 % more than 0.9 at equal error. diffrax's Kvaerno5 + Newton at 1e-6
+        (`SpringIntegrator()`) costs ~1.6 s/scene: use it for reverse-mode gradients of a
+        flexible column."""
+        if self.column is None:
+            return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5")
+        return GeneralizedAlpha(rtol=1e-5, atol=1e-5)
+
+    @property
+    def history_fields(self) -> tuple[str, ...]:
+        return HISTORY_FIELDS
+
+    @property
+    def flexible(self) -> bool:
+        return self.column is not None
+
+    # -- mechanics ------------------------------------------------------------------------------
+    def mass(self):
+        """Column mass m [kg] (per unit out-of-plane thickness for the default section)."""
+        if self.column is None:
+            return QUASI_RIGID_RHO * 2 * self.block.b * 2 * self.block.h
+        A, _ = self.column.section(self.block)
+        return self.column.rho * A * 2 * self.block.h
+
+    def total_inertia(self):
+        """Itot about the base centre: (4/3) m h² (eq. 11), or I′o with added masses."""
+        m, blk = self.mass(), self.block
+        return m * blk.inertia_ratio if self.added_masses else (4.0 / 3.0) * m * blk.h**2
+
+    def rotational_masses(self):
+        """Rotational inertia at the n + 1 column nodes: ΔI/(n + 1) with the added masses, else the
+        section's rotary inertia ρ I L_trib (keeps M regular; Rayleigh beam)."""
+        blk, n = self.block, self.n_elements
+        if self.added_masses:
+            return jnp.full(n + 1, (self.total_inertia() - (4.0 / 3.0) * self.mass() * blk.h**2) / (n + 1))
+        _, I = self.column.section(blk)
+        le = 2 * blk.h / n
+        return self.column.rho * I * le * jnp.concatenate([jnp.full(1, 0.5), jnp.ones(n - 1), jnp.full(1, 0.5)])
+
+    def _require_column(self, what: str):
+        if self.column is None:
+            raise JaxrockInputError(f"{what}: the quasi-rigid SM (column=None) has no column; give a Column")
+
+    def first_period(self):
+        """First fixed-base period T₁ [s] of the discretised column with the model's rotational masses
+        (base rotation clamped, no gravity): the period ζ refers to (eq. 21 is the bare solid column's)."""
+        self._require_column("first_period")
+        A, I = self.column.section(self.block)
+        E = self.column.E
+        return beam.first_period(self.block.h, self.n_elements, self.mass(), E * A, E * I, self.rotational_masses())
+
+    def rayleigh(self):
+        """Rayleigh coefficients (a₀, a₁) of the column, C = a₀ M + a₁ K on its deformations:
+        stiffness proportional, a₀ = 0 and a₁ = ζ T₁/π (ζ = a₁ ω₁/2 at T₁ = `first_period`)."""
+        return jnp.zeros(()), self.zeta * self.first_period() / jnp.pi
+
+    def pushover(self, theta):
+        """The model's own static pushover: the lateral load F/(m g) that holds the column at base
+        rotation `theta` [rad] (any shape), applied as a uniform lateral acceleration of its mass (for
+        a rigid column: F at mid-height, eq. 9's load). Solved by Newton on the static equilibrium
+        ∇V(q) = (F/m) r with θ prescribed (r: the ground load vector; gravity P-Δ and, for a flexible
+        column, its bending included). Quasi-rigid: (M(θ)/(m g h) − sinθ)/cosθ, which is eq. 9,
+        tanα/cosθ − tanθ, once the spring has yielded (|θ| beyond its pre-yield band)."""
+        if self.fixed_base:
+            raise JaxrockInputError("pushover: a fixed-base column (fixed_base=True) does not rock")
+        theta = jnp.asarray(theta, dtype=float)
+        mech = self.system()
+        if mech.n is None:
+            f = lambda th: jax.grad(mech.potential)(jnp.atleast_1d(th))[0] / (mech.m * G * mech.h * jnp.cos(th))
+            return jnp.vectorize(f)(theta)
+        r = mech.r * G  # generalized force of a unit lateral acceleration ratio (F/(m g) = 1)
+        grad_v = jax.grad(mech.potential)
+        scale = jnp.tile(jnp.array([1.0, 1.0, 0.0]), mech.n) * (mech.h - 1.0) + 1.0  # h for translations
+
+        def one(th):
+            q0 = mech.initial_state(th)[: mech.ndof]
+            lam0 = pushover_eq9(th, mech.alpha_r)
+
+            def residual(x):
+                return grad_v(q0.at[1:].add(x[:-1] * scale)) - x[-1] * r
+
+            x = jnp.concatenate([jnp.zeros(mech.ndof - 1), jnp.atleast_1d(lam0)])
+            for _ in range(8):  # Newton: quadratic from the rigidly rotated, preloaded column
+                x = x - _linalg.solve(jax.jacfwd(residual)(x), residual(x))
+            return x[-1]
+
+        return jnp.vectorize(one)(theta)
+
+    def system(self, track_energy: bool = False) -> SpringSystem:
+        """The assembled system of this model (`SpringSystem`): its arrays computed once; with
+        `track_energy`, the dissipated and input work integrated alongside."""
+        return assemble(self, track_energy)
+
+    # -- public pieces for calibration / custom solves --------------------------------------------
+    def vector_field(self, t, y, excitation: AbstractExcitation):
+        """dy/dt of the first-order form y = [q, v] (q[0] = θ). Prepares the mechanics on each call;
+        inside loops prefer `self.system().vector_field` or `SpringIntegrator.solve`."""
+        return self.system().vector_field(t, y, excitation)
+
+    def initial_state(self, theta0=0.0, omega0=0.0):
+        """y at rest (gravity-preloaded column) rotated rigidly by θ0 with angular velocity ω0."""
+        return self.system().initial_state(theta0, omega0)
+
+    def base_rotation(self, y):
+        return y[0]
+
+    def base_velocity(self, y):
+        N = 1 if self.column is None else beam.n_dof(self.n_elements)
+        return y[N]
+
+    def static_potential(self, theta):
+        """The one-DOF SM's own exact potential at zero velocity, My θs log cosh(θ/θs) − m g h (1 − cosθ)
+        [J] (→ SPEC's E(θ) = m g R (sinα|θ| − cosα(1 − cosθ)) as θs → 0). For the flexible model
+        this is the rigidly rotated column's value (its deformation adds only strain energy)."""
+        return self.system().rigid_potential(theta)
+
+    def mechanical_energy(self, y):
+        return self.system().mechanical_energy(y)
+
+    # -- run ------------------------------------------------------------------------------------
+    def stepper(self, integrator, save=None, t1=None):
+        """The run as an `AbstractStepper` of `integrator` (an `AbstractSpringIntegrator`), on the
+        mechanics prepared here once (energy integrals tracked when `save` asks for energies)."""
+        if not isinstance(integrator, AbstractSpringIntegrator):
+            raise JaxrockInputError(f"SpringModel needs a SpringIntegrator or GeneralizedAlpha, got {type(integrator).__name__}")
+        fields = () if save is None else save.fields
+        system = self.system(track_energy=any(f in ENERGY_FIELDS for f in fields))
+        return integrator.stepper(self, system, save, t1)
+
+    @property
+    def overturn_rotation(self):
+        """|θ| [rad] at which the body has overturned: threshold·α′ (+inf for a fixed base)."""
+        return jnp.inf if self.fixed_base else self.threshold * self.block.alpha_r
+
+    def run_end(self, system, excitation, save=None, t1=None):
+        """The latest end of a run: `t1` (default the last save time) for a history; for a summary
+        `t1`, or 20 rocking periods 2π/p′ after the excitation."""
+        if save is not None:
+            return save.ts[-1] if t1 is None else t1
+        t_end = excitation.t_end
+        return t_end + 20 * 2 * jnp.pi / system.p_r if t1 is None else jnp.maximum(t1, t_end)
+
+    def watch(self, system: SpringSystem) -> Watch:
+        """The levels a run is watched against (`jaxrock.bookkeeping`): overturning at
+        `overturn_rotation`, uplift beyond the spring's pre-yield band (`SpringSystem.theta_up`)."""
+        alpha_r = self.block.alpha_r
+        return Watch(alpha=alpha_r, threshold=self.threshold,
+                     overturn=self.overturn_rotation, uplift=system.theta_up)
+
+
+def _quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -> SpringModel:
+    """A scenes file's quasi-rigid spring model (added masses; default damper, backbone, smoothing)."""
+    return SpringModel(block, None, cbar=cbar, backbone=DEFAULT_BACKBONE if backbone is None else backbone,
+                       smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
+
+
+def _flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None) -> SpringModel:
+    """A scenes file's flexible spring model: a concrete column unless E, ρ, ζ are given."""
+    column = Column(DEFAULT_E if E is None else E, DEFAULT_RHO if rho is None else rho)
+    return SpringModel(block, column, zeta=DEFAULT_ZETA if zeta is None else zeta, cbar=cbar,
+                       backbone=DEFAULT_BACKBONE if backbone is None else backbone,
+                       smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
+
+
+register_model_kind("spring", _quasi_rigid_scene, ("cbar", "backbone", "smoothing"), "quasi-rigid spring model (SM), added masses")
+register_model_kind("spring-flexible", _flexible_scene, ("cbar", "E", "rho", "zeta", "backbone", "smoothing"),
+                    "spring model with an elastic column (concrete by default)")
