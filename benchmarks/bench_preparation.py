@@ -2,7 +2,7 @@
 
     python benchmarks/bench_preparation.py [--rows 100000] [--samples 1000000]
 
-- `jaxrock.batch.read_scenes` on `--rows` rows (2h 1–50 m, tanα 0.05–0.35, a third each rigid,
+- `jaxrock.io.scenes_file.read_scenes` on `--rows` rows (2h 1–50 m, tanα 0.05–0.35, a third each rigid,
   quasi-rigid and flexible models, symmetric and antisymmetric pulses by ratio, random η / c̄ / E
   cells left empty half the time; seed 0): every row parsed and checked, every group's values
   ready to stack.
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import jaxrock as jr
-from jaxrock.batch import read_scenes
+from jaxrock.io.scenes_file import read_scenes
 
 HERE = Path(__file__).resolve().parent
 LINES: list[str] = []

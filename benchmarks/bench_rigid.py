@@ -117,7 +117,7 @@ def main() -> None:
     spec_fn = getattr(jr, "overturning_spectrum", None)
     if spec_fn is None:
         try:
-            from jaxrock.spectra import overturning_spectrum as spec_fn
+            from jaxrock.analyses.spectra import overturning_spectrum as spec_fn
         except ImportError:
             spec_fn = None
     if spec_fn is not None:

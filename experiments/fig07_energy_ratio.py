@@ -1,13 +1,13 @@
 """Figure 7 and the c̄ calibration (issue 4): `python experiments/fig07_energy_ratio.py [--out out]`.
 
 Writes <out>/fig07_energy_ratio.png, <out>/calibration_cbar.png and <out>/calibration.csv and
-prints the calibration table; see `jaxrock.calibration`.
+prints the calibration table; see `jaxrock.analyses.calibration`.
 """
 
 import argparse
 import time
 
-from jaxrock.calibration import calibration_report
+from jaxrock.reports import calibration_report
 
 ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 ap.add_argument("--out", default="out", help="output folder (default: out)")

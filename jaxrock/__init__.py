@@ -1,5 +1,11 @@
 """jaxrock: differentiable, vmappable rocking-body simulation (rigid and spring models) in JAX.
 
+Layers, top-down (each imports only from its own layer and those below; README "Layout"):
+front ends (`cli`, `reports`, `plotting`) → analyses (`analyses`: the batch engine, spectra,
+calibration, scenes files) → input/output (`io`) → models with their integrators (`rigid`,
+`spring`) → the protocol (`model`: model → stepper, `simulate`; `bookkeeping`: what a run records)
+→ values (`geometry`, `excitation`, `results`). Everything public is re-exported here.
+
 Simulations run in float64: importing jaxrock sets `jax_enable_x64`. There is no float32 mode
 (it ended the default scene in `max_steps` with θ/α = 0, and 33 of 4096 cells of a spectrum
 failed); the variable `JAXROCK_X64` that once chose it is refused unless it is 1.
@@ -51,21 +57,17 @@ __all__ += [
     "RigidModel",
 ]
 
-from .records import el_centro, read_at2, read_record, read_two_column
-
-__all__ += ["el_centro", "read_at2", "read_record", "read_two_column"]
-
-from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, refine_boundaries, run_batch
-
-__all__ += ["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch"]
-
-from .batch import read_scenes, run_scenes
-
-__all__ += ["read_scenes", "run_scenes"]
-
 from .spring import (DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, Bilinear, Column, GeneralizedAlpha, SpringIntegrator,
                      SpringModel, SpringSystem, Tanh, cbar_eq17, first_period_eq21, pushover_eq9)
-from .calibration import CalibrationResult, calibrate_cbar, calibration_report, energy_ratio, energy_ratio_grid, fit_power_law, rm_target
+from .io import el_centro, read_at2, read_record, read_scenes, read_two_column
+
+__all__ += ["el_centro", "read_at2", "read_record", "read_two_column", "read_scenes"]
+
+from .analyses import (CalibrationResult, RecordSpectrum, Spectrum, calibrate_cbar, energy_ratio, energy_ratio_grid, fit_power_law,
+                       overturning_spectrum, record_overturning_scale, refine_boundaries, rm_target, run_batch, run_scenes)
+
+__all__ += ["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
+            "run_scenes"]
 
 __all__ += [
     "SpringModel",
@@ -89,3 +91,12 @@ __all__ += [
     "calibration_report",
     "rm_target",
 ]
+
+
+def __getattr__(name):
+    # The report writes figures: matplotlib is imported when it is first asked for, not with jaxrock.
+    if name == "calibration_report":
+        from .reports import calibration_report
+
+        return calibration_report
+    raise AttributeError(f"module 'jaxrock' has no attribute {name!r}")

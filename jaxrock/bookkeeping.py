@@ -62,11 +62,6 @@ def step_peaks(ts, th, om):
     return jnp.where(valid, best, 0.0)
 
 
-def hermite_peak(ts, th, om):
-    """max |θ| over all steps from (t, θ, θ̇) at the step ends (`step_peaks`)."""
-    return jnp.max(step_peaks(ts, th, om))
-
-
 def hermite_crossing(t0, t1, th0, th1, om0, om1, level, newton: int = 4):
     """Time in [t0, t1] at which |θ| reaches `level` on the step's cubic Hermite interpolant, for a
     step that ends beyond it (|θ₁| ≥ level): the linear estimate refined by Newton on the cubic,

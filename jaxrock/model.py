@@ -6,7 +6,7 @@ integrator settings are a separate value; the output request is a `Save` (or not
 
 Every entry point drives a model the same way: the model pairs itself with an integrator into an
 `AbstractStepper` (init, step, done, finish; its `Schedule` says how batches advance it), and
-`simulate`, the spectra (`jaxrock.spectra.run_batch`) and the scenes files (`jaxrock.batch`) only
+`simulate`, the spectra (`jaxrock.analyses.engine.run_batch`) and the scenes files (`jaxrock.io.scenes_file`) only
 call those methods. A model kind that scenes files name is registered with `register_model_kind`.
 """
 
@@ -60,7 +60,7 @@ class AbstractSpringIntegrator(AbstractIntegrator):
 
 
 class Schedule(NamedTuple):
-    """How a batch of scenes is advanced (`jaxrock.spectra.run_batch`).
+    """How a batch of scenes is advanced (`jaxrock.analyses.engine.run_batch`).
 
     - `passes`: loop steps per pass, in order (the last repeats): between passes the scenes still
       running are gathered into a smaller batch, so that finished ones stop costing. Empty: the
@@ -196,7 +196,7 @@ class AbstractModel(eqx.Module):
 
 
 class ModelKind(NamedTuple):
-    """A model kind that scenes files name (`jaxrock.batch`'s `model` column, the CLI's `--model`):
+    """A model kind that scenes files name (`jaxrock.io.scenes_file`'s `model` column, the CLI's `--model`):
     `build(block, **parameters)` makes the model of one scene (traceable: batches vmap it), from the
     scene's `Block` and the values of its `parameters` (batch columns, e.g. `eta`, `cbar`, `E`; a
     parameter left out is not passed, so the builder's default applies)."""
@@ -212,7 +212,7 @@ MODEL_KINDS: dict[str, ModelKind] = {}
 
 def register_model_kind(name: str, build: Callable[..., "AbstractModel"], parameters: tuple[str, ...] = (),
                         description: str = "") -> ModelKind:
-    """Make a model kind nameable in scenes files (`jaxrock.batch`); a module registers its own."""
+    """Make a model kind nameable in scenes files (`jaxrock.io.scenes_file`); a module registers its own."""
     if not name or name != name.lower() or "," in name:
         raise JaxrockInputError(f"model kind {name!r}: a lower-case name without commas")
     MODEL_KINDS[name] = kind = ModelKind(name, build, tuple(parameters), description)

@@ -1,6 +1,6 @@
 """Figures in the style of the paper: overturning spectra (figures 6, 9, 11, 15), their uplift and
-overturning boundary lines (figures 12, 16), time histories (figures 5, 8, 13) and record spectra
-(figure 10).
+overturning boundary lines (figures 12, 16), time histories (figures 5, 8, 13), record spectra
+(figure 10), and the damper calibration (figure 7 and the calibrated c̄).
 
 Every function returns the matplotlib `Figure` and, with `path=...`, also writes it as a PNG.
 The data each plot draws is kept on the figure as `fig.jaxrock_data` (a dict of numpy arrays), so
@@ -315,3 +315,51 @@ __all__ = [
     "plot_record_spectrum",
     "boundary_lines",
 ]
+
+
+def plot_energy_ratio(tan_alphas, cbars, xs, r2, targets, *, path=None):
+    """Figure 7: the SM's free-rocking energy ratio per cycle r_eq² against θ₀/α, one line per
+    (c̄, tanα) (`r2[i, j]` over `xs` for tan_alphas[i], cbars[j]), the RM's η⁴ as levels."""
+    fig, ax = plt.subplots(figsize=(7.0, 4.8))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    styles = ["-", "--", ":"]
+    for j, c in enumerate(cbars):
+        for i, t in enumerate(tan_alphas):
+            ax.plot(xs, r2[i, j], styles[i % 3], color=colors[j % len(colors)], lw=1.5, label=f"c̄ = {c:g}, tanα = {t:g}")
+    for i, t in enumerate(tan_alphas):
+        ax.axhline(targets[i], color="k", ls=styles[i % 3], lw=0.8, alpha=0.7)
+        ax.text(0.01, targets[i], f" RM r² = η⁴, tanα = {t:g}", va="bottom", fontsize=7, transform=ax.get_yaxis_transform())
+    ax.axvspan(0.5, 0.95, color="0.9", zorder=0, label="calibration angles")
+    ax.set_xlabel("θ₀/α")
+    ax.set_ylabel("r_eq² = E(θ₁)/E(θ₀)")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0.4, 1.0)
+    ax.set_title("Figure 7: SM (added masses) free-rocking energy ratio per cycle")
+    ax.legend(fontsize=7, ncol=3, loc="lower left")
+    fig.tight_layout()
+    return _finish(fig, path, {"theta0_over_alpha": np.asarray(xs), "r2": np.asarray(r2), "targets": np.asarray(targets)})
+
+
+def plot_calibration(res, fit, *, path=None):
+    """The calibrated damper c̄ against α (`CalibrationResult`), eq. 17 and the power-law fit
+    (`PowerLawFit`), and the ratio to eq. 17."""
+    from .spring import cbar_eq17
+
+    a = np.asarray(res.alpha)
+    c = np.asarray(res.cbar)
+    aa = np.linspace(a.min(), a.max(), 200)
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10.0, 4.2))
+    ax.plot(a, c, "o", label="calibrated (optax Adam through the SM)")
+    ax.plot(aa, np.asarray(cbar_eq17(aa)), "k--", label="eq. 17: 0.02 (α/0.1)²")
+    ax.plot(aa, fit(aa), "-", color="C1", label=f"fit: {fit.k:.4f} (α/0.1)^{fit.n:.2f}")
+    ax.set_xlabel("α [rad]")
+    ax.set_ylabel("c̄ = c/(m g^0.5 R^1.5)")
+    ax.legend(fontsize=8)
+    ax.set_title("Damper calibration: SM r_eq² = RM η⁴")
+    ax2.plot(a, c / np.asarray(res.cbar_eq17), "o-")
+    ax2.axhline(1.0, color="k", lw=0.8)
+    ax2.set_xlabel("α [rad]")
+    ax2.set_ylabel("c̄ calibrated / c̄ eq. 17")
+    ax2.set_title("gap to eq. 17")
+    fig.tight_layout()
+    return _finish(fig, path, {"alpha": a, "cbar": c, "cbar_eq17": np.asarray(res.cbar_eq17)})

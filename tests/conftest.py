@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import jaxrock  # noqa: F401  (enables float64)
-from jaxrock.spectra import Spectrum
+from jaxrock.analyses.spectra import Spectrum
 
 # Reuse compiled XLA programs across test files of one run (and across runs on one machine).
 jax.config.update(

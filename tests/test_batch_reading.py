@@ -9,8 +9,8 @@ import pytest
 
 import jaxrock as jr
 from jaxrock import JaxrockInputError
-from jaxrock.batch import read_scenes, scene_model
-from jaxrock.spectra import PULSES
+from jaxrock.io.scenes_file import read_scenes, scene_model
+from jaxrock.excitation import PULSES
 
 ROWS = """id,height,tan_alpha,width,tan_alpha_base,model,pulse,a_p,accel_ratio,omega_p,omega_ratio,scale,eta,cbar,E,rho,zeta
 a,10,0.2,,,rigid,symmetric,,3,,2,,,,,,

@@ -2,6 +2,8 @@
 located on the steps' cubic Hermite interpolants, a run's record as the merge of its pieces' records,
 and the `Solution` it gives (clamped to the threshold, never NaN with status ok)."""
 
+import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -25,12 +27,13 @@ def _watch(uplift=0.1, overturn=0.25):
 def test_crossings_and_peak_converge_at_fourth_order(n):
     """Coarse steps: the Hermite peak and crossing times converge to the closed forms as dt⁴."""
     ts, th, om = _swing(n)
-    rec = _watch(overturn=0.35).steps(ts, th, om)  # never reaches 0.35
+    steps = eqx.filter_jit(lambda w, *a: w.steps(*a))
+    rec = steps(_watch(overturn=0.35), ts, th, om)  # never reaches 0.35
     dt = float(ts[1] - ts[0])
     assert abs(float(rec.peak) - A) < 0.05 * dt**4 * A * W**4
     assert abs(float(rec.t_uplift) - np.arcsin(0.1 / A) / W) < 0.05 * dt**4 * W**3
     assert not bool(rec.overturned) and np.isinf(float(rec.t_overturn))
-    rec = _watch(overturn=0.25).steps(ts, th, om)
+    rec = steps(_watch(overturn=0.25), ts, th, om)
     assert bool(rec.overturned)
     assert abs(float(rec.t_overturn) - np.arcsin(0.25 / A) / W) < 0.05 * dt**4 * W**3
 
@@ -40,9 +43,12 @@ def test_a_run_is_the_merge_of_its_pieces():
     ts, th, om = _swing(40)
     watch = _watch()
     whole = watch.steps(ts, th, om)
-    rec = Record.start(th[0])
-    for k in range(len(ts) - 1):
-        rec = rec.merge(watch.steps(ts[k : k + 2], th[k : k + 2], om[k : k + 2]))
+
+    def piece(rec, k):
+        take = lambda x: jax.lax.dynamic_slice(x, (k,), (2,))
+        return rec.merge(watch.steps(take(ts), take(th), take(om))), None
+
+    rec, _ = jax.lax.scan(piece, Record.start(th[0]), jnp.arange(len(ts) - 1))
     for a, b in zip((whole.peak, whole.t_uplift, whole.overturned, whole.t_overturn), (rec.peak, rec.t_uplift, rec.overturned, rec.t_overturn)):
         assert float(a) == float(b)
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import jaxrock  # noqa: F401  (float64)
-from jaxrock.calibration import (
+from jaxrock.analyses.calibration import (
     CALIBRATION_ANGLES,
     SpringFamily,
     calibrate_cbar,
@@ -159,7 +159,7 @@ def test_power_law_fit_recovers_exact_law():
 
 @pytest.mark.slow
 def test_report_writes_files(tmp_path):
-    from jaxrock.calibration import calibration_report
+    from jaxrock.reports import calibration_report
 
     rep = calibration_report(tmp_path, tan_alphas=[0.1, 0.2, 0.3], progress=False, fig7_theta0_over_alpha=XS)
     for p in rep.files.values():

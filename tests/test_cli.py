@@ -18,7 +18,7 @@ from typer.testing import CliRunner
 
 import jaxrock as jr
 from jaxrock.cli import app, even_batch, parse_values
-from jaxrock.spectra import Spectrum, overturning_spectrum
+from jaxrock.analyses.spectra import Spectrum, overturning_spectrum
 
 runner = CliRunner()
 # jaxrock.simulate, jitted: the same compiled function as the CLI's (shared cache per function)
@@ -289,7 +289,7 @@ def test_batch_parameter_for_wrong_model(tmp_path):
 
 # -- record spectrum, calibrate ------------------------------------------------------------------
 def test_record_spectrum_equals_library(tmp_path):
-    from jaxrock.spectra import record_overturning_scale
+    from jaxrock.analyses.spectra import record_overturning_scale
 
     t = np.arange(0, 2.0, 0.02)
     acc = 0.4 * np.sin(2 * np.pi * 1.0 * t) * np.exp(-t)  # [g]

@@ -19,7 +19,7 @@ import typer
 
 import jaxrock as jr
 from jaxrock import JaxrockInputError
-from jaxrock.spectra import Spectrum
+from jaxrock.analyses.spectra import Spectrum
 from test_cli import _write, invoke
 
 # -- honest exits: a run that is not ok exits 1 with a line saying what to change -----------------
@@ -59,7 +59,7 @@ def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
     """The checkpoint of an interrupted symmetric run, rerun as antisymmetric with the same --out:
     exit 2 and one line naming the difference, before any cell runs (it resumed the symmetric
     cells and labelled them antisymmetric)."""
-    from jaxrock import provenance
+    from jaxrock.io import provenance
     from jaxrock.cli import build_model
 
     out = tmp_path / "spec"
@@ -83,7 +83,7 @@ def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
 def test_calibrate_names_the_slendernesses_that_did_not_converge(tmp_path, monkeypatch):
     """The CLI's decision on a calibration report (the real run is the slow test above): exit 1
     and one line naming the unconverged slendernesses; a fully converged report exits 0."""
-    import jaxrock.calibration as cal
+    import jaxrock.reports as cal
 
     class Report:
         files: dict = {}
@@ -121,7 +121,7 @@ def test_unwritable_output_fails_before_the_work(tmp_path, monkeypatch, args, na
     scenes.write_text("height,tan_alpha,accel_ratio,omega_ratio\n10,0.2,3,4\n")
     runs = []
     monkeypatch.setattr(jr.model, "simulate", lambda *a, **k: runs.append(1))
-    monkeypatch.setattr("jaxrock.cli._simulate", lambda *a, **k: runs.append(1))
+    monkeypatch.setattr("jaxrock.cli.commands._simulate", lambda *a, **k: runs.append(1))
     r = invoke(*[a.format(blocked=blocked, scenes=scenes) for a in args])
     assert r.exit_code == 2, r.output
     assert f"{name} " in r.output and "a_file is a file, not a folder" in r.output
@@ -173,7 +173,7 @@ def test_huge_grid_is_refused_with_an_estimate_unless_yes():
     assert "100,000,000 cells: about 5.3 h and 6.4 GB (at 0.19 ms each" in r.output and "--yes" in r.output
     assert len(r.output.strip().splitlines()) == 1 and time.perf_counter() - t0 < 2.0
     # the gate itself: --yes lets the same work through; a flexible grid is dearer per cell
-    from jaxrock.cli import _estimate
+    from jaxrock.cli.guards import _estimate
 
     _estimate(10**8, "rigid", yes=True)
     _estimate(800_000, "spring-flexible", yes=True)  # 56 min: announced, allowed
@@ -196,7 +196,7 @@ def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, mon
     """A results file carries how it was made (<results>.made_by.json): resuming after the record
     file's content changed (same name, same row inputs), or under another package version, is
     refused with one line naming it; a results file with no description is refused too."""
-    from jaxrock import provenance
+    from jaxrock.io import provenance
 
     rec = tmp_path / "rec.txt"
     t = np.arange(100) * 0.02
@@ -247,7 +247,7 @@ def test_output_another_live_run_is_writing_is_refused_before_the_work(tmp_path,
 
 
 def test_lock_of_a_dead_run_is_taken_over_and_released(tmp_path):
-    from jaxrock._files import exclusive
+    from jaxrock.io.files import exclusive
 
     gone = subprocess.Popen([sys.executable, "-c", "pass"])
     gone.wait()
@@ -296,7 +296,7 @@ def test_misspelt_batch_column_is_refused_naming_the_close_match(tmp_path):
 def test_byte_order_marks_are_accepted_in_scenes_and_records(tmp_path):
     """A spreadsheet's UTF-8 byte-order mark made the scenes file report "no 'height' column" and
     a two-column record refuse its first line."""
-    from jaxrock.batch import read_scenes
+    from jaxrock.io.scenes_file import read_scenes
 
     (tmp_path / "rec.txt").write_text("0 0.1\n0.01 0.2\n0.02 -0.1\n", encoding="utf-8-sig")
     assert jr.read_record(tmp_path / "rec.txt").n == 3

@@ -19,7 +19,7 @@ from jaxrock.plotting import (  # noqa: E402
     plot_spectra_grid,
     plot_spectrum,
 )
-from jaxrock.spectra import RecordSpectrum, Spectrum  # noqa: E402
+from jaxrock.analyses.spectra import RecordSpectrum, Spectrum  # noqa: E402
 
 
 def _spectrum(shift=0.0, status_bad=False):

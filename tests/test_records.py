@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from jaxrock import G, JaxrockInputError
-from jaxrock.records import el_centro, read_at2, read_record, read_two_column
+from jaxrock.io.records import el_centro, read_at2, read_record, read_two_column
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason=f"shared data folder {SHARED} is absent")

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import jaxrock as jr
-from jaxrock import JaxrockInputError, spectra
+from jaxrock import JaxrockInputError
+from jaxrock.analyses import spectra
 
 W = np.linspace(1.0, 15.0, 6)
 A = np.linspace(0.5, 10.0, 6)

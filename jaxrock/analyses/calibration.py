@@ -23,24 +23,21 @@ paper's missing eq. 13). The paper fitted c̄ by hand ("based on the data in Fig
   (one per α; log keeps c̄ > 0) minimising, for each α, the mean over a fixed set of angles
   θ₀/α ∈ [0.5, 0.95] of ``(r_eq²(θ₀/α; α, c̄) − η′⁴)²``. See its docstring for the stopping rule.
 - `fit_power_law`: least squares of ``log c̄ = log k + n log(α/0.1)`` with standard errors.
-- `calibration_report(out_dir)`: the table (CSV), figure 7 and the calibration plot (PNG); what
-  the CLI command ``jaxrock calibrate`` prints.
+- `jaxrock.reports.calibration_report(out_dir)` runs these and writes the table (CSV), figure 7
+  and the calibration plot (PNG); what the CLI command ``jaxrock calibrate`` prints.
 
 Findings (default quasi-rigid SM with added masses, θs = 10⁻⁴ α, angles 0.5, 0.6, …, 0.9, 0.95):
 the calibrated c̄ is 0.0203, 0.0881, 0.2192 at tanα = 0.1, 0.2, 0.3 against eq. 17's 0.0199,
 0.0779, 0.1699 (+2 %, +13 %, +29 %); the power-law fit over tanα ∈ [0.05, 0.35] gives
 k = 0.0208 ± 0.0004, n = 2.18 ± 0.02 rather than 0.02, 2. r_eq² depends on θ₀/α
 (by 0.016 at tanα = 0.1 up to 0.06 at tanα = 0.3 between θ₀/α = 0.5 and 0.95), so no single c̄ matches the
-target at every angle; the residual reported is the RMS over the angles. See `calibration_report`.
+target at every angle; the residual reported is the RMS over the angles. See `jaxrock.reports.calibration_report`.
 """
 
 from __future__ import annotations
 
-import csv
 import math
-import time
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 
 import diffrax
 import equinox as eqx
@@ -51,11 +48,11 @@ import optax
 import optimistix as optx
 from jaxtyping import Array, Bool, Float, Int
 
-from . import interrupt
-from ._validate import JaxrockInputError, check_range
-from .excitation import StillGround
-from .geometry import Block
-from .spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17
+from .. import interrupt
+from .._validate import JaxrockInputError, check_range
+from ..excitation import StillGround
+from ..geometry import Block
+from ..spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel, cbar_eq17
 
 #: θ₀/α of the calibration (the paper: "for θ₀/α > 0.5"); 6 angles in [0.5, 0.95].
 CALIBRATION_ANGLES: tuple[float, ...] = (0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
@@ -269,6 +266,19 @@ def _values_and_slopes(family, tan_alphas, log_c, xs, integrator):
     return vg(tan_alphas, log_c, xs)
 
 
+def rm_targets(family, tan_alphas):
+    """The RM's per-cycle energy ratio η′⁴ at each tanα (`rm_target`) for the family's geometry."""
+    return _targets(family, jnp.asarray(tan_alphas, dtype=float))
+
+
+def warm_up(tan_alphas, theta0_over_alpha=CALIBRATION_ANGLES, family: "SpringFamily | None" = None):
+    """Compile (and run once) `calibrate_cbar`'s per-iteration pass, to time compilation apart."""
+    family = SpringFamily() if family is None else family
+    ta = jnp.asarray(tan_alphas, dtype=float)
+    jax.block_until_ready(_values_and_slopes(family, ta, jnp.zeros(ta.shape) + math.log(0.05),
+                                             jnp.asarray(theta0_over_alpha, dtype=float), default_integrator(family)))
+
+
 @eqx.filter_jit
 def _targets(family, tan_alphas):
     return jax.vmap(lambda ta: rm_target(family.block(ta)))(tan_alphas)
@@ -466,172 +476,6 @@ def fit_power_law(alpha, cbar, alpha_ref: float = 0.1) -> PowerLawFit:
     )
 
 
-# ----------------------------------------------------------------------------------------------
-# report: table, figure 7, calibration plot
-# ----------------------------------------------------------------------------------------------
-@dataclass
-class CalibrationReport:
-    """What `calibration_report` computed and wrote (numpy arrays; `table` is a list of row dicts)."""
-
-    result: CalibrationResult
-    fit: PowerLawFit
-    fit_paper_range: PowerLawFit  # tanα ∈ {0.1, 0.2, 0.3}-ish range only (0.1 ≤ tanα ≤ 0.3)
-    table: list[dict]
-    fig7_theta0_over_alpha: np.ndarray
-    fig7_r2: np.ndarray  # (n_tanα, n_c̄, n_θ)
-    files: dict[str, Path] = field(default_factory=dict)
-    seconds: dict[str, float] = field(default_factory=dict)
-
-    def format_table(self) -> str:
-        head = f"{'tanα':>6} {'α [rad]':>8} {'target r²':>10} {'c̄ calib':>9} {'c̄ eq.17':>9} {'ratio':>6} {'residual':>9} {'iters':>5}"
-        rows = [head]
-        for r in self.table:
-            rows.append(
-                f"{r['tan_alpha']:6.3f} {r['alpha']:8.4f} {r['target_r2']:10.4f} {r['cbar_calibrated']:9.4f} "
-                f"{r['cbar_eq17']:9.4f} {r['cbar_calibrated'] / r['cbar_eq17']:6.3f} {r['residual_rms']:9.2e} {r['iterations']:5d}"
-            )
-        rows.append(f"fit over tanα ∈ [{self.table[0]['tan_alpha']:g}, {self.table[-1]['tan_alpha']:g}]: {self.fit}  (paper: k = 0.02, n = 2)")
-        rows.append(f"fit over tanα ∈ [0.1, 0.3]: {self.fit_paper_range}")
-        return "\n".join(rows)
-
-
-def _plot_fig7(path, tan_alphas, cbars, xs, r2, targets):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7.0, 4.8))
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    styles = ["-", "--", ":"]
-    for j, c in enumerate(cbars):
-        for i, t in enumerate(tan_alphas):
-            ax.plot(xs, r2[i, j], styles[i % 3], color=colors[j % len(colors)], lw=1.5, label=f"c̄ = {c:g}, tanα = {t:g}")
-    for i, t in enumerate(tan_alphas):
-        ax.axhline(targets[i], color="k", ls=styles[i % 3], lw=0.8, alpha=0.7)
-        ax.text(0.01, targets[i], f" RM r² = η⁴, tanα = {t:g}", va="bottom", fontsize=7, transform=ax.get_yaxis_transform())
-    ax.axvspan(0.5, 0.95, color="0.9", zorder=0, label="calibration angles")
-    ax.set_xlabel("θ₀/α")
-    ax.set_ylabel("r_eq² = E(θ₁)/E(θ₀)")
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0.4, 1.0)
-    ax.set_title("Figure 7: SM (added masses) free-rocking energy ratio per cycle")
-    ax.legend(fontsize=7, ncol=3, loc="lower left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-
-
-def _plot_calibration(path, res: CalibrationResult, fit: PowerLawFit):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    a = np.asarray(res.alpha)
-    c = np.asarray(res.cbar)
-    aa = np.linspace(a.min(), a.max(), 200)
-    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10.0, 4.2))
-    ax.plot(a, c, "o", label="calibrated (optax Adam through the SM)")
-    ax.plot(aa, np.asarray(cbar_eq17(aa)), "k--", label="eq. 17: 0.02 (α/0.1)²")
-    ax.plot(aa, fit(aa), "-", color="C1", label=f"fit: {fit.k:.4f} (α/0.1)^{fit.n:.2f}")
-    ax.set_xlabel("α [rad]")
-    ax.set_ylabel("c̄ = c/(m g^0.5 R^1.5)")
-    ax.legend(fontsize=8)
-    ax.set_title("Damper calibration: SM r_eq² = RM η⁴")
-    ax2.plot(a, c / np.asarray(res.cbar_eq17), "o-")
-    ax2.axhline(1.0, color="k", lw=0.8)
-    ax2.set_xlabel("α [rad]")
-    ax2.set_ylabel("c̄ calibrated / c̄ eq. 17")
-    ax2.set_title("gap to eq. 17")
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-
-
-def calibration_report(
-    out_dir="out",
-    *,
-    tan_alphas=None,
-    theta0_over_alpha=CALIBRATION_ANGLES,
-    family: SpringFamily | None = None,
-    fig7_theta0_over_alpha=None,
-    progress: bool = True,
-    max_iter: int = 300,
-) -> CalibrationReport:
-    """Calibrate c̄ over tanα ∈ [0.05, 0.35] (default 13 values), fit c̄ = k (α/0.1)^n, and write
-    to `out_dir`: `calibration.csv` (tanα, α, target r², calibrated c̄, eq. 17 c̄, residual, …),
-    `fig07_energy_ratio.png` (r_eq² against θ₀/α for tanα = 0.1, 0.2, 0.3 and c̄ = 0.02, 0.08,
-    0.18, RM r² levels as horizontal lines) and `calibration_cbar.png`. Returns the data
-    (`CalibrationReport.format_table()` gives the printable table)."""
-    family = SpringFamily() if family is None else family
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    ta = np.round(np.linspace(0.05, 0.35, 13), 6) if tan_alphas is None else np.asarray(tan_alphas, dtype=float)
-    xs7 = np.linspace(0.05, 0.98, 32) if fig7_theta0_over_alpha is None else np.asarray(fig7_theta0_over_alpha, dtype=float)
-    seconds = {}
-
-    # compile (and run once) the per-iteration pass first, to report compile and run time apart
-    t0 = time.perf_counter()
-    integ = default_integrator(family)
-    jax.block_until_ready(
-        _values_and_slopes(family, jnp.asarray(ta), jnp.zeros(len(ta)) + math.log(0.05), jnp.asarray(theta0_over_alpha, dtype=float), integ)
-    )
-    seconds["compile"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    res = calibrate_cbar(ta, theta0_over_alpha=theta0_over_alpha, family=family, progress=progress, max_iter=max_iter)
-    seconds["calibration"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    r7 = np.asarray(energy_ratio_grid(FIG7_TAN_ALPHAS, FIG7_CBARS, xs7, family=family))
-    targets7 = np.asarray(_targets(family, jnp.asarray(FIG7_TAN_ALPHAS)))
-    seconds["figure7"] = time.perf_counter() - t0
-
-    fit = fit_power_law(res.alpha, res.cbar)
-    sel = (np.asarray(res.tan_alpha) >= 0.1 - 1e-9) & (np.asarray(res.tan_alpha) <= 0.3 + 1e-9)
-    fit_pr = fit_power_law(np.asarray(res.alpha)[sel], np.asarray(res.cbar)[sel]) if sel.sum() >= 3 else fit
-
-    table = []
-    for i in range(len(ta)):
-        table.append(
-            dict(
-                tan_alpha=float(res.tan_alpha[i]),
-                alpha=float(res.alpha[i]),
-                target_r2=float(res.target[i]),
-                cbar_calibrated=float(res.cbar[i]),
-                cbar_eq17=float(res.cbar_eq17[i]),
-                residual_rms=float(res.residual[i]),
-                bias=float(res.bias[i]),
-                r2_min=float(np.min(res.r2[i])),
-                r2_max=float(np.max(res.r2[i])),
-                iterations=int(res.iterations[i]),
-                converged=bool(res.converged[i]),
-            )
-        )
-    files = {
-        "table": out / "calibration.csv",
-        "figure7": out / "fig07_energy_ratio.png",
-        "calibration": out / "calibration_cbar.png",
-    }
-    with open(files["table"], "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(table[0]))
-        w.writeheader()
-        w.writerows(table)
-        fh.write(f"# fit: {fit}; paper eq. 17: k = 0.02, n = 2\n")
-    _plot_fig7(files["figure7"], FIG7_TAN_ALPHAS, FIG7_CBARS, xs7, r7, targets7)
-    _plot_calibration(files["calibration"], res, fit)
-    return CalibrationReport(
-        result=res,
-        fit=fit,
-        fit_paper_range=fit_pr,
-        table=table,
-        fig7_theta0_over_alpha=xs7,
-        fig7_r2=r7,
-        files=files,
-        seconds=seconds,
-    )
-
-
 __all__ = [
     "CALIBRATION_ANGLES",
     "CALIBRATION_INTEGRATOR",
@@ -645,6 +489,6 @@ __all__ = [
     "calibrate_cbar",
     "PowerLawFit",
     "fit_power_law",
-    "CalibrationReport",
-    "calibration_report",
+    "rm_targets",
+    "warm_up",
 ]

@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validate import JaxrockInputError, is_number
-from .excitation import Record
-from .geometry import G
+from .._validate import JaxrockInputError, is_number
+from ..excitation import Record
+from ..geometry import G
 
 _UNITS = {"g": G, "m/s2": 1.0, "cm/s2": 0.01, "mm/s2": 1e-3, "in/s2": 0.0254, "ft/s2": 0.3048}  # factor to m/s²
 _UNITS_VALID = "g, m/s2, cm/s2 (gal), mm/s2, in/s2, ft/s2 (also written m/s/s, m/sec^2, m/s²)"

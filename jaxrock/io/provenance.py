@@ -17,8 +17,8 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ._files import write_atomically
-from ._validate import JaxrockInputError
+from .._validate import JaxrockInputError
+from .files import write_atomically
 
 
 def package_version() -> str:

@@ -10,7 +10,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable
 
-from ._validate import JaxrockInputError
+from .._validate import JaxrockInputError
 
 
 def output_stem(out: str | os.PathLike, default_name: str) -> Path:

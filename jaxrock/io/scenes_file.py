@@ -1,6 +1,6 @@
-"""Batch runs from a CSV file of scenes: one scene per row → vmapped runs → a results CSV.
-
-`jaxrock batch scenes.csv results.csv [--resume]`, or `run_scenes(scenes, results)` from Python.
+"""The scenes file and the results file of a batch run (`jaxrock batch scenes.csv results.csv
+[--resume]`, or `run_scenes(scenes, results)`, `jaxrock.analyses.scenes`): reading and checking the
+scenes, each row's model and excitation, and the results rows written, read back and resumed.
 
 Scenes file
 -----------
@@ -64,24 +64,20 @@ import difflib
 import io
 import math
 import os
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from tqdm.auto import tqdm
 
-from . import interrupt, provenance
-from ._files import exclusive, output_stem, same_file, write_atomically
-from ._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
-from .excitation import Record
-from .geometry import TAN_ALPHA_MIN, Block
-from .spectra import PULSES, run_batch
-from .results import STATUS_NAMES
-from .model import MODEL_KINDS
+from .._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
+from ..excitation import PULSES, Record
+from ..geometry import TAN_ALPHA_MIN, Block
+from ..model import MODEL_KINDS
+from ..results import STATUS_NAMES
+from .files import output_stem, write_atomically
 
 BUILTIN_RECORDS = ("elcentro",)
 INPUT_COLUMNS = (
@@ -226,6 +222,14 @@ def _invalid_lanes(stacked) -> np.ndarray:
     return ~np.asarray(jax.vmap(lambda one: within_limits(one.limits()))(stacked))
 
 
+def _stack(objs):
+    """Stack the array leaves of structurally equal pytrees along a new leading axis."""
+    dyn = [eqx.partition(o, eqx.is_array)[0] for o in objs]
+    static = eqx.partition(objs[0], eqx.is_array)[1]
+    stacked = jax.tree_util.tree_map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])), *dyn)
+    return eqx.combine(stacked, static)
+
+
 @dataclass
 class Scenes:
     """Every checked row of a scenes file, as arrays (one entry per row) and groups of rows that
@@ -284,7 +288,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     E = t.num("e", 0.0, math.inf, lo_open=True, hi_open=True)
     rho = t.num("rho", 0.0, math.inf, lo_open=True, hi_open=True)
     zeta = t.num("zeta", 0.0, math.inf, hi_open=True)
-    from .spring import DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA, Column, cbar_eq17
+    from ..spring import DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA, Column, cbar_eq17
 
     params = {
         "height": height, "tan_alpha": tan_a, "tan_alpha_base": tan_b,
@@ -395,21 +399,8 @@ def read_scenes(path) -> Scenes:
 
 
 # ----------------------------------------------------------------------------------------------
-# running
+# results file
 # ----------------------------------------------------------------------------------------------
-def _stack(objs):
-    """Stack the array leaves of structurally equal pytrees along a new leading axis."""
-    dyn = [eqx.partition(o, eqx.is_array)[0] for o in objs]
-    static = eqx.partition(objs[0], eqx.is_array)[1]
-    stacked = jax.tree_util.tree_map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])), *dyn)
-    return eqx.combine(stacked, static)
-
-
-def run_stacked(model, exc):
-    """Summaries of a stacked batch (every array leaf of `model` and `exc` has the batch axis)."""
-    return run_batch(model, exc, model_batched=True)
-
-
 def _fmt(x) -> str:
     x = float(x)
     if math.isinf(x):
@@ -417,7 +408,7 @@ def _fmt(x) -> str:
     return repr(x)
 
 
-def _result_rows(sol, k: int) -> list[dict]:
+def result_rows(sol, k: int) -> list[dict]:
     out = []
     status = np.asarray(sol.status._value)
     for i in range(k):
@@ -435,21 +426,7 @@ def _result_rows(sol, k: int) -> list[dict]:
     return out
 
 
-@dataclass
-class BatchReport:
-    """What `run_scenes` did."""
-
-    n_rows: int
-    n_run: int
-    n_skipped: int
-    n_groups: int
-    seconds: float
-    status_counts: dict = field(default_factory=dict)
-    n_overturned: int = 0
-    path: Path | None = None
-
-
-def _read_done(results: Path, header: list[str], scenes: Scenes) -> dict[int, dict]:
+def read_done(results: Path, header: list[str], scenes: Scenes) -> dict[int, dict]:
     """Finished rows of an earlier run (row number → result row), checked against the scenes."""
     done: dict[int, dict] = {}
     if not results.exists():
@@ -490,124 +467,39 @@ def count_results(results) -> int:
         return 0
 
 
-def _chunks(idx: list[int], size: int):
-    for lo in range(0, len(idx), size):
-        yield idx[lo : lo + size]
-
-
-_MIN_PAD = 8
-
-
-def _pad_size(k: int, chunk: int) -> int:
-    """Batch shapes: powers of two from 8 up to the chunk size (few compilations)."""
-    return min(chunk, max(_MIN_PAD, 1 << max(0, (k - 1).bit_length())))
-
-
-def _description(scenes: Scenes) -> dict[str, str]:
-    """What determines a batch's numbers beyond each row's own inputs (which the results file
-    holds): the package version, the integrators (each model's default) and every record's content."""
-    d = {"jaxrock": provenance.package_version(), "integrator": "each model's default"}
-    for values, rec in zip(scenes.values, scenes.records):
-        if rec is not None:
-            name = f"record {values.get('pulse', '')}"
-            if name not in d:
-                d[name] = provenance.value_text(np.concatenate([np.ravel(rec.acc), np.ravel(rec.dt)]))
-    return d
-
-
-def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: int = 256, progress: bool = True) -> BatchReport:
-    """Run every scene of `scenes_path` and write `results_path` (see the module docstring).
-
-    All rows are checked first (a `JaxrockInputError` names a bad row and its column).
-    Results are appended per chunk; with `resume`, rows already in `results_path` are skipped,
-    once `<results>.made_by.json` shows they were made by this package version from the same
-    record contents (else a `JaxrockInputError` names the difference).
-    """
-    if int(chunk_size) < 1:
-        raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
-    chunk_size = int(chunk_size)
-    t0 = time.perf_counter()
-    results = results_path_for(scenes_path, results_path)
-    if same_file(results, scenes_path):
-        raise JaxrockInputError(f"{results}: the results file is the scenes file (the same file by another name); name another")
-    scenes = read_scenes(scenes_path)
-    header = scenes.header
-    clash = [h for h in header if h.lower() in ("row", *RESULT_COLUMNS)]
-    if clash:
-        raise JaxrockInputError(f"{scenes_path}: line 1: column(s) {clash} are names of result columns; rename them")
-    with exclusive(results, "results file"):
-        return _run(scenes, header, results, resume, chunk_size, progress, t0)
-
-
 def results_path_for(scenes_path, results_path) -> Path:
     """The results file: `results_path`, or inside it when it is a folder (or ends with a
     separator) as `<scenes stem>_results.csv`."""
     return output_stem(results_path, f"{Path(scenes_path).stem}_results.csv")
 
 
-def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> BatchReport:
-    """`run_scenes` on checked scenes, the results file held."""
-    made_by = _description(scenes)
-    sidecar = results.with_name(results.name + ".made_by.json")
-    done = _read_done(results, header, scenes) if resume else {}
-    if done:
-        fresh = "run without --resume to start afresh, or write another results file"
-        provenance.check_description(sidecar, made_by, f"{results}", fresh)
-    fields = ["row", *header, *RESULT_COLUMNS]
-
-    todo = {key: idx[~np.isin(scenes.rows[idx], list(done))] for key, idx in scenes.groups.items()}
-    todo = {key: idx for key, idx in todo.items() if idx.size}
-    n_todo = sum(idx.size for idx in todo.values())
-
+def start_results(results: Path, fields: list[str]) -> None:
+    """A fresh results file: its header line."""
     results.parent.mkdir(parents=True, exist_ok=True)
-    if not (resume and results.exists() and done):
-        with open(results, "w", newline="", encoding="utf-8") as fh:
-            csv.DictWriter(fh, fieldnames=fields).writeheader()
-        provenance.write_description(sidecar, made_by)
-    bar = tqdm(total=len(scenes), initial=len(scenes) - n_todo, unit="scene", desc="batch", disable=not progress)
-    new: dict[int, dict] = {}
-    for (kind, exc), idx in todo.items():
-        for part in _chunks(list(idx), chunk_size):
-            interrupt.stop_point()
-            index = np.asarray(part + [part[0]] * (_pad_size(len(part), chunk_size) - len(part)))
-            sol = run_stacked(scenes.model(kind, index), scenes.excitation(exc, index))
-            rows = _result_rows(sol, len(part))
-            with open(results, "a", newline="", encoding="utf-8") as fh:
-                w = csv.DictWriter(fh, fieldnames=fields)
-                for i, res in zip(part, rows):
-                    r = int(scenes.rows[i])
-                    rec = {"row": str(r), **scenes.values[i], **res}
-                    w.writerow(rec)
-                    new[r] = rec
-                fh.flush()
-                os.fsync(fh.fileno())
-            bar.update(len(part))
-    bar.close()
+    with open(results, "w", newline="", encoding="utf-8") as fh:
+        csv.DictWriter(fh, fieldnames=fields).writeheader()
 
-    # all done: rewrite in row order (atomically)
-    allrows = {**done, **new}
+
+def append_results(results: Path, fields: list[str], records: list[dict]) -> None:
+    """Append finished rows, flushed to disk (an interrupted run keeps them)."""
+    with open(results, "a", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writerows(records)
+        fh.flush()
+        os.fsync(fh.fileno())
+
+
+def rewrite_results(results: Path, fields: list[str], rows: dict[int, dict]) -> None:
+    """The finished file: every row in row order, written atomically."""
 
     def write(tmp):
         with open(tmp, "w", newline="", encoding="utf-8") as fh:
             w = csv.DictWriter(fh, fieldnames=fields)
             w.writeheader()
-            for r in sorted(allrows):
-                w.writerow({k: allrows[r][k] for k in fields})
+            for r in sorted(rows):
+                w.writerow({k: rows[r][k] for k in fields})
 
     write_atomically(results, write)
 
-    statuses = [allrows[r]["status"] for r in allrows]
-    counts = {name: statuses.count(name) for name in STATUS_NAMES if statuses.count(name)}
-    return BatchReport(
-        n_rows=len(scenes),
-        n_run=n_todo,
-        n_skipped=len(scenes) - n_todo,
-        n_groups=len(todo),
-        seconds=time.perf_counter() - t0,
-        status_counts=counts,
-        n_overturned=sum(int(allrows[r]["overturned"]) for r in allrows),
-        path=results,
-    )
 
-
-__all__ = ["read_scenes", "run_scenes", "run_stacked", "count_results", "Scenes", "BatchReport", "models", "scene_model", "INPUT_COLUMNS", "RESULT_COLUMNS"]
+__all__ = ["read_scenes", "Scenes", "models", "scene_model", "count_results", "results_path_for", "INPUT_COLUMNS", "RESULT_COLUMNS"]

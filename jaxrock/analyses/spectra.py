@@ -1,12 +1,9 @@
 """Overturning spectra: max |θ|/α′ over a grid of (ω_p/p′, a_p/(g tanα′)), by `vmap`.
 
 In these coordinates the rigid spectrum depends on α′ only (SPEC "Spectra"). The grid is run in
-batches of `batch_size` cells (memory stays bounded), each driven through the model's
-`AbstractStepper`: where its `Schedule` has passes (the rigid model, generalized-α spring runs) a
-batch is advanced a few loop steps at a time and the cells still running are gathered into a
-smaller batch between passes, so that a few long cells (chattering near the
-uplift line, rocking near the overturning line) do not make the whole batch wait for them. A
-`checkpoint` file keeps finished batches: an interrupted run resumes where it stopped.
+batches of `batch_size` cells (memory stays bounded) by the batch engine (`jaxrock.analyses.engine`:
+the model's stepper, the running cells gathered between passes). A `checkpoint` file keeps finished
+batches: an interrupted run resumes where it stopped.
 """
 
 from __future__ import annotations
@@ -22,15 +19,15 @@ import jax.numpy as jnp
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import interrupt, provenance
-from ._files import exclusive, write_atomically
-from ._validate import JaxrockInputError, check_grid
-from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse
-from .geometry import G
-from .model import AbstractIntegrator, AbstractModel, AbstractStepper, flag_invalid, guard_scene
-from .results import STATUS_NAMES, Solution
-
-PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}
+from .. import interrupt
+from .._validate import JaxrockInputError, check_grid
+from ..excitation import Record, pulse_class
+from ..geometry import G
+from ..io import provenance
+from ..io.files import exclusive, write_atomically
+from ..model import AbstractIntegrator, AbstractModel
+from ..results import STATUS_NAMES
+from .engine import batch_limit, make_stepper, run_batch
 
 
 def _flags(long_name: str, meanings, dtype=np.int8) -> dict:
@@ -135,143 +132,6 @@ class Spectrum(eqx.Module):
             )
 
 
-# -- batched runs ---------------------------------------------------------------------------------
-def batch_limit(stepper: AbstractStepper, budget_bytes: int = 2**29) -> int:
-    """Cells per batch whose running state fits `budget_bytes` (`Schedule.bytes_per_scene`; at
-    least 64), e.g. a flexible generalized-α cell's ladder of tangent inverses."""
-    per = stepper.schedule.bytes_per_scene
-    return 2**62 if per <= 0 else max(64, budget_bytes // per)
-
-
-def _bucket(n: int, batch: int, smallest: int) -> int:
-    """Pad sizes to a few fixed values so the compiled pass is reused (batch, batch/4, batch/16, ...)."""
-    size = batch
-    while size // 4 >= max(n, smallest):
-        size //= 4
-    return size
-
-
-def _vmap(fn, batched: bool):
-    """vmap over (stepper, excitation, *rest): the stepper too when it carries a batch axis."""
-    return eqx.filter_vmap(fn, in_axes=(eqx.if_array(0) if batched else None, eqx.if_array(0)))
-
-
-@eqx.filter_jit
-def _guard(model, exc, batched):
-    """Per scene: its values where within their limits, else the quiet scene's, and whether they
-    were (as `simulate`: a batch built under vmap cannot be refused at construction). A model
-    without a batch axis was checked when it was built and is returned as it is."""
-
-    def one(m, e):
-        m, e, ok = guard_scene(m, e)
-        return (m if batched else None), e, ok
-
-    m, e, ok = _vmap(one, batched)(model, exc)
-    return (m if batched else model), e, ok
-
-
-_flag = eqx.filter_jit(eqx.filter_vmap(flag_invalid))  # `flag_invalid`, scene by scene
-
-
-@eqx.filter_jit
-def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_batched: bool = False) -> AbstractStepper:
-    """The summary stepper of `model` (of each model, vmapped, when `model_batched`): what a model
-    prepares once (mass matrices, tangents, preloads) is computed once for the whole batch."""
-    if model_batched:
-        return eqx.filter_vmap(lambda m: m.stepper(integrator))(model)
-    return model.stepper(integrator)
-
-
-# `_init` and `_advance` return the states with their done flags: the host loop reads the flags
-# without sending the states back (a flexible cell's state holds its ladder of tangent inverses).
-@eqx.filter_jit
-def _init(stepper, exc, batched):
-    return _vmap(lambda s, e: (lambda c: (c, s.done(c)))(s.init(e)), batched)(stepper, exc)
-
-
-@eqx.filter_jit
-def _advance(stepper, exc, state, n, batched):
-    return _vmap(lambda s, es: (lambda c: (c, s.done(c)))(s.advance(es[0], es[1], n)), batched)(stepper, (exc, state))
-
-
-@eqx.filter_jit
-def _finish(stepper, exc, state, batched):
-    return _vmap(lambda s, es: s.finish(es[0], es[1]), batched)(stepper, (exc, state))
-
-
-@eqx.filter_jit
-def _solve(stepper, exc, batched):
-    return _vmap(lambda s, e: s.solve(e), batched)(stepper, exc)
-
-
-def _compacted(stepper: AbstractStepper, excitations, batched: bool) -> Solution:
-    """Run a batch in passes (`Schedule.passes`), gathering the cells still running between
-    passes: the same results as `simulate`, cell by cell."""
-    passes, smallest = stepper.schedule.passes, stepper.schedule.smallest_batch
-    n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
-    # The state (and the batched inputs) live on the host between passes: gathers and scatters of
-    # changing sizes in numpy cost nothing, where in JAX each new size would compile.
-    tree_np = lambda t: jax.tree_util.tree_map(np.array, t)
-    dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
-    dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
-    dyn_e, dyn_s = tree_np(dyn_e), tree_np(dyn_s)
-    state, done = tree_np(_init(stepper, excitations, batched))
-    used, k = 0, 0
-    while used < stepper.max_steps:
-        todo = np.flatnonzero(~done)
-        if todo.size == 0:
-            break
-        n_pass = min(passes[k], stepper.max_steps - used)
-        size = _bucket(todo.size, n, smallest)
-        for lo in range(0, todo.size, size):
-            idx = todo[lo : lo + size]
-            padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
-            take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
-            sub_s = eqx.combine(take(dyn_s), static_s) if batched else stepper
-            sub_e = eqx.combine(take(dyn_e), static_e)
-            sub_c, sub_done = tree_np(_advance(sub_s, sub_e, take(state), jnp.asarray(n_pass), batched))
-
-            def put(x, y):
-                x[idx] = y[: idx.size]
-                return x
-
-            state = jax.tree_util.tree_map(put, state, sub_c)
-            done[idx] = sub_done[: idx.size]
-        used += n_pass
-        k = min(k + 1, len(passes) - 1)
-    return _finish(stepper, excitations, state, batched)
-
-
-def run_batch(
-    model: AbstractModel,
-    excitations: AbstractExcitation,
-    integrator: AbstractIntegrator | None = None,
-    *,
-    model_batched: bool = False,
-) -> Solution:
-    """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
-    and so does `model` when `model_batched` (one model per scene; else one model for all).
-    Driven through the model's `AbstractStepper`: in passes with the running cells gathered between
-    them when its `schedule` has passes, else as one vmapped `solve`. A scene with a parameter
-    outside its limits comes back `Status.invalid_input` with NaN numbers, as from `simulate`."""
-    integ = model.default_integrator() if integrator is None else integrator
-    model, excitations, ok = _guard(model, excitations, model_batched)
-    stepper = make_stepper(model, integ, model_batched)
-    if stepper.schedule.passes:
-        sol = _compacted(stepper, excitations, model_batched)
-    else:
-        sol = _solve(stepper, excitations, model_batched)
-    return _flag(sol, ok)
-
-
-def _pulse_class(pulse):
-    if isinstance(pulse, str):
-        if pulse not in PULSES:
-            raise JaxrockInputError(f"pulse = {pulse!r}; valid: {sorted(PULSES)}")
-        return PULSES[pulse]
-    return pulse
-
-
 def overturning_spectrum(
     model: AbstractModel,
     omega_ratio,
@@ -293,7 +153,7 @@ def overturning_spectrum(
       rewritten); rerunning the same call after an interruption resumes from it, and it is
       removed when the spectrum (with its refinement) is complete, unless `keep_checkpoint`
       (the caller removes it once the result is saved: the CLI does). It records
-      what made it (`jaxrock.provenance`): one of another run (model, parameters, pulse, grid,
+      what made it (`jaxrock.io.provenance`): one of another run (model, parameters, pulse, grid,
       integrator, version) or an unreadable one is refused with a `JaxrockInputError`, and so
       is one that another run is writing (`<checkpoint>.lock`).
     - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
@@ -302,7 +162,7 @@ def overturning_spectrum(
     ar = check_grid("accel_ratio (a_p/(g tan alpha))", accel_ratio)
     if int(batch_size) < 1:
         raise JaxrockInputError(f"batch_size = {batch_size}; valid: an integer >= 1")
-    cls = _pulse_class(pulse)
+    cls = pulse_class(pulse)
     ck = Path(checkpoint) if checkpoint is not None else None
     with contextlib.ExitStack() as stack:
         if ck is not None:
@@ -391,7 +251,7 @@ def refine_boundaries(
     value; one with none stays NaN. Overturning is not monotone in a_p: the line found is the
     least a_p within the bracket, not below it.
     """
-    cls = _pulse_class(pulse)
+    cls = pulse_class(pulse)
     block = model.block
     p, tan_a = float(block.p_r), float(jnp.tan(block.alpha_r))
     ar, wr = spectrum.accel_ratio, spectrum.omega_ratio

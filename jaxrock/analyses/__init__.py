@@ -1,0 +1,16 @@
+"""Analyses: many runs of a model, computed and returned as values (no files but checkpoints).
+
+- `engine`: the batch engine — summaries of a batch of scenes through the models' steppers;
+- `spectra`: overturning spectra of pulses (`overturning_spectrum`, `refine_boundaries`) and the
+  least overturning scale of a record (`record_overturning_scale`);
+- `calibration`: the damper c̄ calibrated by gradient against the rigid model's energy loss (eq. 17);
+- `scenes`: a scenes file run row by row, vmapped by structure (`run_scenes`).
+"""
+
+from .calibration import CalibrationResult, calibrate_cbar, energy_ratio, energy_ratio_grid, fit_power_law, rm_target
+from .engine import run_batch
+from .scenes import run_scenes
+from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, refine_boundaries
+
+__all__ = ["run_batch", "Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries",
+           "run_scenes", "CalibrationResult", "calibrate_cbar", "energy_ratio", "energy_ratio_grid", "fit_power_law", "rm_target"]

@@ -1,0 +1,151 @@
+"""The batch engine: summaries of many scenes at once, each driven through its model's
+`AbstractStepper` (`jaxrock.model`). Where the stepper's `Schedule` has passes (the rigid model,
+generalized-α spring runs) a batch is advanced a few loop steps at a time and the cells still
+running are gathered into a smaller batch between passes, so that a few long cells (chattering
+near the uplift line, rocking near the overturning line) do not make the whole batch wait; else
+it is one vmapped solve. Every scene is guarded as `simulate` guards it. Used by the spectra, the
+scenes files and any sweep."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..excitation import AbstractExcitation
+from ..model import AbstractIntegrator, AbstractModel, AbstractStepper, flag_invalid, guard_scene
+from ..results import Solution
+
+
+def batch_limit(stepper: AbstractStepper, budget_bytes: int = 2**29) -> int:
+    """Cells per batch whose running state fits `budget_bytes` (`Schedule.bytes_per_scene`; at
+    least 64), e.g. a flexible generalized-α cell's ladder of tangent inverses."""
+    per = stepper.schedule.bytes_per_scene
+    return 2**62 if per <= 0 else max(64, budget_bytes // per)
+
+
+def _bucket(n: int, batch: int, smallest: int) -> int:
+    """Pad sizes to a few fixed values so the compiled pass is reused (batch, batch/4, batch/16, ...)."""
+    size = batch
+    while size // 4 >= max(n, smallest):
+        size //= 4
+    return size
+
+
+def _vmap(fn, batched: bool):
+    """vmap over (stepper, excitation, *rest): the stepper too when it carries a batch axis."""
+    return eqx.filter_vmap(fn, in_axes=(eqx.if_array(0) if batched else None, eqx.if_array(0)))
+
+
+@eqx.filter_jit
+def _guard(model, exc, batched):
+    """Per scene: its values where within their limits, else the quiet scene's, and whether they
+    were (as `simulate`: a batch built under vmap cannot be refused at construction). A model
+    without a batch axis was checked when it was built and is returned as it is."""
+
+    def one(m, e):
+        m, e, ok = guard_scene(m, e)
+        return (m if batched else None), e, ok
+
+    m, e, ok = _vmap(one, batched)(model, exc)
+    return (m if batched else model), e, ok
+
+
+_flag = eqx.filter_jit(eqx.filter_vmap(flag_invalid))  # `flag_invalid`, scene by scene
+
+
+@eqx.filter_jit
+def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_batched: bool = False) -> AbstractStepper:
+    """The summary stepper of `model` (of each model, vmapped, when `model_batched`): what a model
+    prepares once (mass matrices, tangents, preloads) is computed once for the whole batch."""
+    if model_batched:
+        return eqx.filter_vmap(lambda m: m.stepper(integrator))(model)
+    return model.stepper(integrator)
+
+
+# `_init` and `_advance` return the states with their done flags: the host loop reads the flags
+# without sending the states back (a flexible cell's state holds its ladder of tangent inverses).
+@eqx.filter_jit
+def _init(stepper, exc, batched):
+    return _vmap(lambda s, e: (lambda c: (c, s.done(c)))(s.init(e)), batched)(stepper, exc)
+
+
+@eqx.filter_jit
+def _advance(stepper, exc, state, n, batched):
+    return _vmap(lambda s, es: (lambda c: (c, s.done(c)))(s.advance(es[0], es[1], n)), batched)(stepper, (exc, state))
+
+
+@eqx.filter_jit
+def _finish(stepper, exc, state, batched):
+    return _vmap(lambda s, es: s.finish(es[0], es[1]), batched)(stepper, (exc, state))
+
+
+@eqx.filter_jit
+def _solve(stepper, exc, batched):
+    return _vmap(lambda s, e: s.solve(e), batched)(stepper, exc)
+
+
+def _compacted(stepper: AbstractStepper, excitations, batched: bool) -> Solution:
+    """Run a batch in passes (`Schedule.passes`), gathering the cells still running between
+    passes: the same results as `simulate`, cell by cell."""
+    passes, smallest = stepper.schedule.passes, stepper.schedule.smallest_batch
+    n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
+    # The state (and the batched inputs) live on the host between passes: gathers and scatters of
+    # changing sizes in numpy cost nothing, where in JAX each new size would compile.
+    tree_np = lambda t: jax.tree_util.tree_map(np.array, t)
+    dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
+    dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
+    dyn_e, dyn_s = tree_np(dyn_e), tree_np(dyn_s)
+    state, done = tree_np(_init(stepper, excitations, batched))
+    used, k = 0, 0
+    while used < stepper.max_steps:
+        todo = np.flatnonzero(~done)
+        if todo.size == 0:
+            break
+        n_pass = min(passes[k], stepper.max_steps - used)
+        size = _bucket(todo.size, n, smallest)
+        for lo in range(0, todo.size, size):
+            idx = todo[lo : lo + size]
+            padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
+            take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
+            sub_s = eqx.combine(take(dyn_s), static_s) if batched else stepper
+            sub_e = eqx.combine(take(dyn_e), static_e)
+            sub_c, sub_done = tree_np(_advance(sub_s, sub_e, take(state), jnp.asarray(n_pass), batched))
+
+            def put(x, y):
+                x[idx] = y[: idx.size]
+                return x
+
+            state = jax.tree_util.tree_map(put, state, sub_c)
+            done[idx] = sub_done[: idx.size]
+        used += n_pass
+        k = min(k + 1, len(passes) - 1)
+    return _finish(stepper, excitations, state, batched)
+
+
+def run_batch(
+    model: AbstractModel,
+    excitations: AbstractExcitation,
+    integrator: AbstractIntegrator | None = None,
+    *,
+    model_batched: bool = False,
+) -> Solution:
+    """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
+    and so does `model` when `model_batched` (one model per scene; else one model for all).
+    Driven through the model's `AbstractStepper`: in passes with the running cells gathered between
+    them when its `schedule` has passes, else as one vmapped `solve`. A scene with a parameter
+    outside its limits comes back `Status.invalid_input` with NaN numbers, as from `simulate`."""
+    integ = model.default_integrator() if integrator is None else integrator
+    model, excitations, ok = _guard(model, excitations, model_batched)
+    stepper = make_stepper(model, integ, model_batched)
+    if stepper.schedule.passes:
+        sol = _compacted(stepper, excitations, model_batched)
+    else:
+        sol = _solve(stepper, excitations, model_batched)
+    return _flag(sol, ok)
+
+
+def run_stacked(model, exc):
+    """Summaries of a stacked batch (every array leaf of `model` and `exc` has the batch axis)."""
+    return run_batch(model, exc, model_batched=True)

@@ -1,0 +1,137 @@
+"""Running a scenes file (`jaxrock batch scenes.csv results.csv`, `run_scenes`): the checked rows
+(`jaxrock.io.scenes_file`, which documents both files) grouped by structure, each group stacked and
+run by the batch engine (`jaxrock.analyses.engine`) in chunks of `chunk_size` rows padded to a power
+of two ≥ 8 (few compiled shapes), the results appended per chunk (an interrupted run keeps its
+finished rows; `resume=True` skips them) and rewritten in row order at the end."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from .. import interrupt
+from .._validate import JaxrockInputError
+from ..io import provenance
+from ..io.files import exclusive, same_file
+from ..io.scenes_file import (RESULT_COLUMNS, Scenes, append_results, read_done, read_scenes, result_rows, results_path_for,
+                              rewrite_results, start_results)
+from ..results import STATUS_NAMES
+from .engine import run_stacked
+
+
+@dataclass
+class BatchReport:
+    """What `run_scenes` did."""
+
+    n_rows: int
+    n_run: int
+    n_skipped: int
+    n_groups: int
+    seconds: float
+    status_counts: dict = field(default_factory=dict)
+    n_overturned: int = 0
+    path: Path | None = None
+
+
+def _chunks(idx: list[int], size: int):
+    for lo in range(0, len(idx), size):
+        yield idx[lo : lo + size]
+
+
+_MIN_PAD = 8
+
+
+def _pad_size(k: int, chunk: int) -> int:
+    """Batch shapes: powers of two from 8 up to the chunk size (few compilations)."""
+    return min(chunk, max(_MIN_PAD, 1 << max(0, (k - 1).bit_length())))
+
+
+def _description(scenes: Scenes) -> dict[str, str]:
+    """What determines a batch's numbers beyond each row's own inputs (which the results file
+    holds): the package version, the integrators (each model's default) and every record's content."""
+    d = {"jaxrock": provenance.package_version(), "integrator": "each model's default"}
+    for values, rec in zip(scenes.values, scenes.records):
+        if rec is not None:
+            name = f"record {values.get('pulse', '')}"
+            if name not in d:
+                d[name] = provenance.value_text(np.concatenate([np.ravel(rec.acc), np.ravel(rec.dt)]))
+    return d
+
+
+def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: int = 256, progress: bool = True) -> BatchReport:
+    """Run every scene of `scenes_path` and write `results_path` (see the module docstring).
+
+    All rows are checked first (a `JaxrockInputError` names a bad row and its column).
+    Results are appended per chunk; with `resume`, rows already in `results_path` are skipped,
+    once `<results>.made_by.json` shows they were made by this package version from the same
+    record contents (else a `JaxrockInputError` names the difference).
+    """
+    if int(chunk_size) < 1:
+        raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
+    chunk_size = int(chunk_size)
+    t0 = time.perf_counter()
+    results = results_path_for(scenes_path, results_path)
+    if same_file(results, scenes_path):
+        raise JaxrockInputError(f"{results}: the results file is the scenes file (the same file by another name); name another")
+    scenes = read_scenes(scenes_path)
+    header = scenes.header
+    clash = [h for h in header if h.lower() in ("row", *RESULT_COLUMNS)]
+    if clash:
+        raise JaxrockInputError(f"{scenes_path}: line 1: column(s) {clash} are names of result columns; rename them")
+    with exclusive(results, "results file"):
+        return _run(scenes, header, results, resume, chunk_size, progress, t0)
+
+
+def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> BatchReport:
+    """`run_scenes` on checked scenes, the results file held."""
+    made_by = _description(scenes)
+    sidecar = results.with_name(results.name + ".made_by.json")
+    done = read_done(results, header, scenes) if resume else {}
+    if done:
+        fresh = "run without --resume to start afresh, or write another results file"
+        provenance.check_description(sidecar, made_by, f"{results}", fresh)
+    fields = ["row", *header, *RESULT_COLUMNS]
+
+    todo = {key: idx[~np.isin(scenes.rows[idx], list(done))] for key, idx in scenes.groups.items()}
+    todo = {key: idx for key, idx in todo.items() if idx.size}
+    n_todo = sum(idx.size for idx in todo.values())
+
+    if not (resume and results.exists() and done):
+        start_results(results, fields)
+        provenance.write_description(sidecar, made_by)
+    bar = tqdm(total=len(scenes), initial=len(scenes) - n_todo, unit="scene", desc="batch", disable=not progress)
+    new: dict[int, dict] = {}
+    for (kind, exc), idx in todo.items():
+        for part in _chunks(list(idx), chunk_size):
+            interrupt.stop_point()
+            index = np.asarray(part + [part[0]] * (_pad_size(len(part), chunk_size) - len(part)))
+            sol = run_stacked(scenes.model(kind, index), scenes.excitation(exc, index))
+            records = [{"row": str(int(scenes.rows[i])), **scenes.values[i], **res} for i, res in zip(part, result_rows(sol, len(part)))]
+            append_results(results, fields, records)
+            new.update({int(rec["row"]): rec for rec in records})
+            bar.update(len(part))
+    bar.close()
+
+    # all done: rewrite in row order (atomically)
+    allrows = {**done, **new}
+    rewrite_results(results, fields, allrows)
+
+    statuses = [allrows[r]["status"] for r in allrows]
+    counts = {name: statuses.count(name) for name in STATUS_NAMES if statuses.count(name)}
+    return BatchReport(
+        n_rows=len(scenes),
+        n_run=n_todo,
+        n_skipped=len(scenes) - n_todo,
+        n_groups=len(todo),
+        seconds=time.perf_counter() - t0,
+        status_counts=counts,
+        n_overturned=sum(int(allrows[r]["overturned"]) for r in allrows),
+        path=results,
+    )
+
+
+__all__ = ["run_scenes", "BatchReport"]

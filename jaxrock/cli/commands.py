@@ -1,0 +1,330 @@
+"""The `jaxrock` commands (typer): each parses its options, calls the library and prints; files are
+written by `jaxrock.reports` and the analyses themselves."""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from pathlib import Path
+from typing import Optional
+
+import equinox as eqx
+import numpy as np
+import typer
+
+from .guards import (CELL_SECONDS, EXIT_INTERRUPTED, EXIT_UNTRUSTED, RECORD_RUN_SECONDS, _estimate, _exit_if_untrusted, _guarded,
+                     _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts)
+from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model, even_batch,
+                      parse_values, solution_summary, spectrum_summary)
+
+app = typer.Typer(
+    cls=_OneLineErrors,
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # help texts are shown as written: units "[m]" and ranges "a:b:n" are not markup
+    help="Rocking bodies under earthquakes (Vassiliou, Mackie & Stojadinovic 2014), in JAX (float64).",
+)
+
+
+
+@app.command()
+@_guarded
+def spectrum(
+    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid (RM), spring (quasi-rigid SM with added masses), spring-flexible (SM, concrete column)"),
+    height: float = typer.Option(10.0, help="full height 2h [m]"),
+    tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
+    tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h, in [tanα, 1)"),
+    pulse: PulseKind = typer.Option(PulseKind.symmetric, help="Ricker pulse shape"),
+    omega_min: float = typer.Option(1.0, help="smallest ω_p/p"),
+    omega_max: float = typer.Option(15.0, help="largest ω_p/p"),
+    n_omega: int = typer.Option(48, help="number of ω_p/p values"),
+    accel_min: float = typer.Option(0.5, help="smallest a_p/(g tanα)"),
+    accel_max: float = typer.Option(10.0, help="largest a_p/(g tanα)"),
+    n_accel: int = typer.Option(48, help="number of a_p/(g tanα) values"),
+    out: str = typer.Option("out/spectrum", help="output stem: writes <out>.nc (netCDF) and <out>.png; a folder (or a path "
+                            "ending in /) means <out>/spectrum.nc and .png"),
+    undamped: bool = typer.Option(False, "--undamped", help="no energy loss: η = 1 (rigid) or c̄ = 0 (spring)"),
+    checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in the folder <out>.checkpoint; a rerun resumes"),
+    batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into equal batches"),
+    refine: int = typer.Option(10, min=0, max=40, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
+    tol: Optional[float] = typer.Option(
+        None, help="spring models: run generalized-α at this local tolerance in (0, 1) (e.g. 1e-6: a quasi-rigid pulse grid ~15x "
+        "faster, max error ~1e-2 in θ/α; see README); default: the model's default integrator"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),
+):
+    """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
+    from ..io.files import output_stem
+    from .._validate import check_writable
+    from ..analyses.spectra import overturning_spectrum
+
+    wr = _axis("omega", omega_min, omega_max, n_omega)
+    ar = _axis("accel", accel_min, accel_max, n_accel)
+    _check_count("--batch-size", batch_size)
+    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped)
+    integ = _integrator(model, tol)
+    out = output_stem(out, "spectrum")
+    for suffix in (".nc", ".png"):
+        check_writable("--out", Path(f"{out}{suffix}"))
+    _hold(out, "--out")
+    kind = "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value
+    _estimate(wr.size * ar.size, kind, yes)
+    ck = Path(f"{out}.checkpoint") if checkpoint else None
+    t0 = time.perf_counter()
+    bs = even_batch(wr.size * ar.size, batch_size)
+    from ..interrupt import Interrupted
+
+    try:
+        spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=bs, progress=not quiet,
+                                    checkpoint=ck, keep_checkpoint=True, refine=refine)
+    except Interrupted:
+        _interrupted(ck, wr.size * ar.size)
+    seconds = time.perf_counter() - t0
+    spec = eqx.tree_at(lambda s: s.attrs, spec, {**spec.attrs, "model_kind": model.value, "undamped": int(undamped),
+                                                  "history": _history()})
+    from ..reports import spectrum_files
+
+    title = f"{model.value}{' (undamped)' if undamped else ''}, {pulse.value} pulse, 2h = {height:g} m, tanα = {tan_alpha:g}"
+    nc, png = spectrum_files(spec, out, title)
+    if ck is not None and ck.exists():  # kept until the result files are written
+        import shutil
+
+        shutil.rmtree(ck)
+    typer.echo(spectrum_summary(spec, seconds))
+    typer.echo(f"wrote {nc} and {png}")
+    _exit_if_untrusted(_status_counts(spec.status), "cell(s)")
+
+
+@functools.cache
+def _jitted_simulate():
+    import equinox as eqx
+
+    from ..model import simulate as _simulate
+
+    return eqx.filter_jit(_simulate)
+
+
+def _simulate(model, excitation, save=None, integrator=None):
+    """`jaxrock.simulate`, jitted (one compilation per model/excitation structure per process)."""
+    return _jitted_simulate()(model, excitation, save=save, integrator=integrator)
+
+
+@app.command()
+@_guarded
+def simulate(
+    height: float = typer.Option(10.0, help="full height 2h [m]"),
+    tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
+    tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h"),
+    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid, spring (quasi-rigid SM), spring-flexible"),
+    pulse: PulseKind = typer.Option(PulseKind.symmetric, help="Ricker pulse shape"),
+    a_p: Optional[float] = typer.Option(None, "--a-p", help="pulse amplitude [m/s²] (default: --accel-ratio 4)"),
+    accel_ratio: Optional[float] = typer.Option(None, help="pulse amplitude as a_p/(g tanα) (default 4)"),
+    omega_p: Optional[float] = typer.Option(None, help="pulse frequency [rad/s] (default 2π)"),
+    omega_ratio: Optional[float] = typer.Option(None, help="pulse frequency as ω_p/p"),
+    record: Optional[str] = typer.Option(None, help="a record file (.AT2 or two-column) or 'elcentro', instead of a pulse"),
+    scale: float = typer.Option(1.0, help="factor on the record"),
+    units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
+                                 "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
+    undamped: bool = typer.Option(False, "--undamped", help="η = 1 (rigid) or c̄ = 0 (spring)"),
+    eta: Optional[float] = typer.Option(None, help="rigid: impact velocity ratio (default 1 − 1.5 sin²α)"),
+    cbar: Optional[float] = typer.Option(None, help="spring: damper c̄ (default eq. 17)"),
+    E: Optional[float] = typer.Option(None, "--E", help="spring-flexible: Young's modulus [Pa] (default 30e9)"),
+    rho: Optional[float] = typer.Option(None, help="spring-flexible: density [kg/m³] (default 2500)"),
+    zeta: Optional[float] = typer.Option(None, help="spring-flexible: column damping ratio (default 0.01)"),
+    backbone: Optional[BackboneKind] = typer.Option(None, help="spring: base-spring backbone (default tanh; bilinear with "
+                                                    "--smoothing 1e-5 is within 1e-3 of the sharp limit, README)"),
+    smoothing: Optional[float] = typer.Option(None, help="spring: pre-yield rotation θs/α′ in (0, 1) (default 1e-4)"),
+    tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
+    plot: Optional[Path] = typer.Option(None, help="write a time-history plot (PNG) here"),
+    t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
+    n_points: Optional[int] = typer.Option(None, help="plot: number of saved time points (default 1500)"),
+):
+    """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
+    from ..plotting import plot_history
+    from ..results import Save
+
+    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta,
+                    backbone=backbone, smoothing=smoothing)
+    exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio, units)
+    integ = _integrator(model, tol)
+    if plot is None:
+        from .._validate import JaxrockInputError
+
+        for flag, v in (("--t-free", t_free), ("--n-points", n_points)):
+            if v is not None:
+                raise JaxrockInputError(f"{flag} applies to the time-history plot: give --plot FILE.png as well")
+    else:
+        from .._validate import check_positive, check_writable
+
+        check_writable("--plot", plot)
+        n_points = 1500 if n_points is None else n_points
+        _check_count("--n-points", n_points)
+        if t_free is not None:
+            check_positive("--t-free", t_free)
+    t0 = time.perf_counter()
+    sol = _simulate(m, exc, integrator=integ)
+    seconds = time.perf_counter() - t0
+    typer.echo(f"{model.value} model, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}")
+    typer.echo(solution_summary(sol, m))
+    typer.echo(f"run time {seconds:.2f} s (with compilation)")
+    from ..interrupt import stop_point
+
+    stop_point()
+    if plot is not None:
+        p = float(m.block.p_r)
+        tf = 2 * 2 * math.pi / p if t_free is None else t_free
+        t_start, t_end = float(exc.t_start), float(exc.t_end)
+        if record is None:  # the pulse window is generous (|üg| < 1e-13 a_p): show its core, |ω_p t| <= 8
+            w = float(exc.omega_p)
+            t_start, t_end = max(t_start, -8.0 / w), min(t_end, 8.0 / w)
+        ts = np.linspace(t_start, t_end + tf, n_points)
+        hist = _simulate(m, exc, save=Save(ts, ("theta",)), integrator=integ)
+        import matplotlib.pyplot as plt
+
+        fig = plot_history(hist, exc, model=m, path=plot, title=f"{model.value}, 2h = {height:g} m, tanα = {tan_alpha:g}\n{desc}")
+        plt.close(fig)
+        typer.echo(f"wrote {plot}")
+    _exit_if_untrusted(_status_counts(sol.status._value), "run")
+
+
+# ----------------------------------------------------------------------------------------------
+# batch
+# ----------------------------------------------------------------------------------------------
+@app.command()
+@_guarded
+def batch(
+    scenes: Path = typer.Argument(..., help="scenes CSV (one scene per row; see `jaxrock.io.scenes_file`)"),
+    results: str = typer.Argument(..., help="results CSV to write (a folder, or a path ending in /: <folder>/<scenes stem>_results.csv)"),
+    resume: bool = typer.Option(False, "--resume", help="skip rows already in the results file"),
+    chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """Run a CSV of scenes (vmapped, grouped by structure) and write a results CSV.
+
+    Columns: height, tan_alpha | width, [tan_alpha_base], [model: rigid | spring | spring-flexible],
+    [pulse: symmetric | antisymmetric | elcentro | FILE], a_p | accel_ratio, omega_p | omega_ratio,
+    [scale], [eta], [cbar], [E], [rho], [zeta]. Results: the inputs plus max_theta, overturned,
+    t_overturn, uplifted, t_uplift, n_impacts, status.
+    """
+    from .._validate import check_writable
+    from ..analyses.scenes import run_scenes
+    from ..io.scenes_file import count_results, results_path_for
+    from ..interrupt import Interrupted
+
+    results = results_path_for(scenes, results)
+    check_writable("results", results)
+    try:
+        rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet)
+    except Interrupted:
+        typer.echo(f"interrupted: {count_results(results):,} rows kept in {results}; resume with: {_resume_command('--resume')}",
+                   err=True)
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    typer.echo(
+        f"{rep.n_rows} rows: {rep.n_run} run in {rep.n_groups} group(s), {rep.n_skipped} skipped (already done); "
+        f"{rep.seconds:.1f} s"
+    )
+    typer.echo(f"overturned: {rep.n_overturned}; status: " + ", ".join(f"{k} {v}" for k, v in rep.status_counts.items()))
+    typer.echo(f"wrote {rep.path}")
+    _exit_if_untrusted(rep.status_counts, "row(s)")
+
+
+# ----------------------------------------------------------------------------------------------
+# record spectrum
+# ----------------------------------------------------------------------------------------------
+@app.command("record-spectrum")
+@_guarded
+def record_spectrum(
+    record: str = typer.Option("elcentro", help="record file (.AT2 or two-column text), or 'elcentro' (packaged El Centro 1940 NS)"),
+    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid, spring, spring-flexible"),
+    tan_alpha: float = typer.Option(0.2, help="slenderness tanα"),
+    tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′"),
+    heights: str = typer.Option("1,2,3,5,7,10,15,20", help="body heights 2h [m]: '1,2,5' or 'a:b:n'"),
+    scales: str = typer.Option(
+        "0.5:12:16",
+        help="record factors of the vmapped sweep ('1,2,5' or 'a:b:n'); the first that overturns is then refined by "
+        "bisection. A coarse sweep is cheap (a vmapped record run costs about as much per lane as a bisection step) "
+        "but can miss a narrow overturning window between two factors",
+    ),
+    units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
+                                 "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
+    refine: int = typer.Option(8, help="bisections refining the least overturning factor (resolution: sweep step / 2^refine)"),
+    out: str = typer.Option("out/record_spectrum", help="output stem: <out>.nc, <out>.csv, <out>.png; a folder (or a path "
+                            "ending in /) means <out>/record_spectrum.*"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h"),
+):
+    """Least scale factor of a record that overturns the body, per height (paper figure 10)."""
+    from .._validate import JaxrockInputError, check_writable
+    from ..analyses.spectra import record_overturning_scale
+    from ..io.files import output_stem
+    from ..reports import record_spectrum_files
+
+    hs = parse_values("--heights", heights)
+    sc = parse_values("--scales", scales)
+    if refine < 0:
+        raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
+    m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
+    exc, desc = _excitation(m.block, "symmetric", record, 1.0, None, None, None, None, units)
+    out = output_stem(out, "record_spectrum")
+    for suffix in (".nc", ".csv", ".png"):
+        check_writable("--out", Path(f"{out}{suffix}"))
+    _hold(out, "--out")
+    per_run = RECORD_RUN_SECONDS * CELL_SECONDS[model.value] / CELL_SECONDS["rigid"] * float(exc.t_end - exc.t_start) / 40.0
+    _estimate(hs.size * (sc.size + refine), model.value, yes, what="record runs", per_cell=per_run)
+    t0 = time.perf_counter()
+    rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet)
+    seconds = time.perf_counter() - t0
+    rs = type(rs)(height=rs.height, scale=rs.scale, bracket_low=rs.bracket_low,
+                  attrs={**rs.attrs, "model_kind": model.value, "history": _history()})
+    nc, csv_path, png = record_spectrum_files(rs, out, f"{model.value}, tanα = {tan_alpha:g}", f"least overturning factor of {desc}")
+    typer.echo(f"{desc}; {model.value} model, tanα = {tan_alpha:g}; {len(hs)} heights × {len(sc)} factors in {seconds:.1f} s")
+    typer.echo(f"{'2h [m]':>8} {'least factor':>13}")
+    for h, s in zip(rs.height, rs.scale):
+        typer.echo(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}")
+    typer.echo(f"wrote {nc}, {csv_path}, {png}")
+
+
+# ----------------------------------------------------------------------------------------------
+# calibrate
+# ----------------------------------------------------------------------------------------------
+@app.command()
+@_guarded
+def calibrate(
+    out: Path = typer.Option(Path("out/calibration"), help="output folder (calibration.csv and the figures)"),
+    tan_alphas: Optional[str] = typer.Option(None, help="slenderness values to calibrate at ('0.1,0.2,0.3' or 'a:b:n'; default 0.05:0.35:13)"),
+    max_iter: int = typer.Option(300, help="optimiser iterations at most"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """Calibrate the spring model's damper c̄ against the rigid model's η⁴ (paper eq. 17, figure 7)."""
+    # Thin wrapper over jaxrock.reports.calibration_report.
+    from .._validate import JaxrockInputError, check_range, check_writable
+    from ..reports import calibration_report
+
+    _check_count("--max-iter", max_iter)
+    check_writable("--out", out / "calibration.csv")
+    ta = None
+    if tan_alphas is not None:
+        ta = parse_values("--tan-alphas", tan_alphas)
+        check_range("--tan-alphas", ta, 0.0, 1.0, lo_open=True, hi_open=True)
+        if np.unique(ta).size < 3:
+            raise JaxrockInputError(f"--tan-alphas = {tan_alphas!r}: {np.unique(ta).size} distinct value(s); "
+                                    "the power-law fit c̄ = k (α/0.1)^n needs at least 3")
+    t0 = time.perf_counter()
+    rep = calibration_report(out, tan_alphas=ta, progress=not quiet, max_iter=max_iter)
+    typer.echo(rep.format_table())
+    typer.echo(f"{time.perf_counter() - t0:.1f} s; wrote " + ", ".join(str(p) for p in rep.files.values()))
+    stuck = [f"{r['tan_alpha']:g}" for r in rep.table if not r["converged"]]
+    if stuck:
+        typer.echo(f"Warning: c̄ did not converge in --max-iter {max_iter} iterations at tanα = {', '.join(stuck)} "
+                   f"({len(stuck)} of {len(rep.table)}): raise --max-iter", err=True)
+        raise typer.Exit(EXIT_UNTRUSTED)
+
+
+def main():  # pragma: no cover
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    app()

@@ -1,0 +1,169 @@
+"""The command line's frame: one-line errors and exit codes, the work estimate before a run,
+output locks, signals (stop at a safe point, say how to resume) and the status verdict after it."""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import typer
+import typer.core
+
+
+class _OneLineErrors(typer.core.TyperGroup):
+    """Click's usage errors (an unknown choice, a non-integer count, an unknown option) as one line,
+    `Error: … (see 'jaxrock CMD --help')`, exit code 2, like every other bad input; click printed
+    four lines (usage, a hint, a blank line, the error)."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        import sys
+
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except typer.Abort:
+            typer.echo("interrupted: nothing kept", err=True)
+            rv = EXIT_INTERRUPTED
+        except typer.TyperException as e:  # click's usage errors and the like
+            if not standalone_mode:
+                raise
+            ctx = getattr(e, "ctx", None)
+            if type(e).__name__ == "NoArgsIsHelpError":  # `jaxrock` alone: the help, as asked
+                typer.echo(e.format_message(), err=True)
+            else:
+                hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+                typer.echo(f"Error: {e.format_message()}{hint}", err=True)
+            rv = e.exit_code
+        if not standalone_mode:
+            return rv
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+
+EXIT_INPUT = 2
+# Work estimate before a run (`_estimate`): measured cost per cell on 2 CPU cores, vmapped
+# (benchmarks/results: bench_rigid.txt 0.19 ms; bench_spring.txt quasi-rigid Tsit5 1.47 ms,
+# generalized-α 1e-6 0.092 ms, flexible 10 elements 4.2 ms), compilation apart (~20 s); a run
+# beyond LIMIT_SECONDS or LIMIT_BYTES needs --yes.
+CELL_SECONDS = {"rigid": 0.19e-3, "spring": 1.47e-3, "spring-ga": 0.092e-3, "spring-flexible": 4.2e-3}
+RECORD_RUN_SECONDS = 0.37  # one rigid run of El Centro (40 s): default record-spectrum, 192 runs in 70.8 s
+CELL_BYTES = 64  # a_p, ω_p, the grid, the results and the checkpoint's copy, per cell
+LIMIT_SECONDS, LIMIT_BYTES = 3600.0, 2e9
+EXIT_UNTRUSTED = 1  # the work ran, but some run ended with a status other than ok
+EXIT_INTERRUPTED = 130  # SIGINT or SIGTERM: stopped at a safe point, finished work kept
+
+# what to change, per failed status (the line printed beside a non-zero exit)
+STATUS_ADVICE = {
+    "max_iterations": "the loop bound was hit before the answer was fixed: shorten the free-rocking time or report the scene",
+    "max_steps": "the step bound was hit: the scene is stiff (tiny tanα or smoothing) or the tolerance too tight "
+    "(loosen --tol, or raise max_steps of the integrator in Python)",
+    "solver_failed": "the integrator failed (step underflow, divergence or NaN): loosen --tol or report the scene",
+    "missed_impact": "an impact was crossed without its event: report the command line as a bug",
+    "invalid_input": "a parameter was outside its valid range: report the command line as a bug (the CLI checks its input)",
+}
+
+
+def _fail(msg: str):
+    typer.echo(f"Error: {msg}", err=True)
+    raise typer.Exit(EXIT_INPUT)
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 120 else (f"{seconds / 60:.0f} min" if seconds < 7200 else f"{seconds / 3600:.1f} h")
+
+
+def _estimate(n_cells: int, kind: str, yes: bool, what: str = "cells", per_cell: float | None = None) -> None:
+    """Refuse (exit 2) a run estimated beyond an hour or 2 GB unless --yes; announce one over a
+    minute. `kind` keys CELL_SECONDS; `per_cell` [s] overrides its cost."""
+    cost = CELL_SECONDS[kind] if per_cell is None else per_cell
+    seconds = n_cells * cost
+    mem = n_cells * CELL_BYTES
+    est = (f"{n_cells:,} {what}: about {_duration(seconds)} and {mem / 1e9:.2g} GB "
+           f"(at {1e3 * cost:.3g} ms each, measured on 2 CPU cores)")
+    if (seconds > LIMIT_SECONDS or mem > LIMIT_BYTES) and not yes:
+        _fail(f"{est}; beyond {LIMIT_SECONDS / 3600:g} h or {LIMIT_BYTES / 1e9:g} GB: pass --yes to run it, or coarsen the grid")
+    if seconds > 60:
+        typer.echo(f"{est}, plus compilation", err=True)
+
+
+def _resume_command(extra: str | None = None) -> str:
+    import shlex
+    import sys
+
+    argv = sys.argv[1:]
+    return "jaxrock " + shlex.join(argv + ([extra] if extra and extra not in argv else []))
+
+
+def _interrupted(ck: Optional[Path], n_cells: int):
+    """A stop asked by a signal: remove half-written files, say what is kept and how to resume; exit 130."""
+    from ..io.provenance import checkpoint_cells, remove_temporaries
+
+    if ck is not None and ck.is_dir():
+        remove_temporaries(ck)
+        kept = checkpoint_cells(ck)
+        typer.echo(f"interrupted: {kept:,} of {n_cells:,} cells kept in {ck}; resume with: {_resume_command()}", err=True)
+    else:
+        typer.echo("interrupted: nothing kept (run with --checkpoint to keep finished batches)", err=True)
+    raise typer.Exit(EXIT_INTERRUPTED)
+
+
+def _history() -> str:
+    """The command line of this run, for a file's CF `history` attribute."""
+    import sys
+
+    from ..io.provenance import command_line
+
+    return command_line(sys.argv[1:])
+
+
+def _status_counts(status) -> dict[str, int]:
+    """Status name → number of runs, from (an array of) status codes."""
+    from ..results import STATUS_NAMES
+
+    counts = np.bincount(np.ravel(np.asarray(status)), minlength=len(STATUS_NAMES))
+    return {STATUS_NAMES[k]: int(c) for k, c in enumerate(counts) if c}
+
+
+def _exit_if_untrusted(counts: dict[str, int], what: str):
+    """One line per failed status kind on stderr and exit code 1, when any run is not ok (the
+    files were written; their status column says which)."""
+    bad = {name: c for name, c in counts.items() if name != "ok"}
+    for name, c in bad.items():
+        typer.echo(f"Warning: {c} {what} ended with status {name}: {STATUS_ADVICE[name]}", err=True)
+    if bad:
+        raise typer.Exit(EXIT_UNTRUSTED)
+
+
+_held: contextlib.ExitStack | None = None  # the locks of the running command (`_hold`)
+
+
+def _hold(path, what: str) -> None:
+    """Hold `<path>.lock` until the command ends: a second run writing the same output is refused."""
+    from ..io.files import exclusive
+
+    _held.enter_context(exclusive(path, what))
+
+
+def _guarded(fn):
+    """A command: a `JaxrockInputError` becomes a one-line message and exit code 2; SIGINT and
+    SIGTERM stop the run at its next safe point (`jaxrock.interrupt`) and exit 130 — a command
+    with work to keep catches `Interrupted` itself and says how to resume."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        global _held
+        from .._validate import JaxrockInputError
+        from ..interrupt import deferred_signals
+
+        try:
+            with deferred_signals(), contextlib.ExitStack() as _held:
+                return fn(*args, **kwargs)
+        except JaxrockInputError as e:
+            _fail(str(e))
+        except KeyboardInterrupt:
+            typer.echo("interrupted: nothing kept", err=True)
+            raise typer.Exit(EXIT_INTERRUPTED) from None
+
+    return wrapper

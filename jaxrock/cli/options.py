@@ -1,0 +1,221 @@
+"""The command line's options: list and axis values, the model, integrator and excitation of a scene
+from its flags (checked here, built as a scenes-file row is), and the printed summaries."""
+
+from __future__ import annotations
+
+import math
+from enum import Enum
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+MAX_LIST = 100_000  # values of a list option ('a:b:n')
+
+
+class ModelKind(str, Enum):
+    rigid = "rigid"
+    spring = "spring"
+    spring_flexible = "spring-flexible"
+
+
+class BackboneKind(str, Enum):
+    tanh = "tanh"
+    bilinear = "bilinear"
+
+
+class PulseKind(str, Enum):
+    symmetric = "symmetric"
+    antisymmetric = "antisymmetric"
+
+
+def _check_count(name: str, n: int):
+    from .._validate import JaxrockInputError
+
+    if n < 1:
+        raise JaxrockInputError(f"{name} = {n}; valid: an integer >= 1")
+
+
+def _axis(name: str, lo: float, hi: float, n: int) -> np.ndarray:
+    from .._validate import JaxrockInputError, check_positive
+
+    _check_count(f"--n-{name}", n)
+    check_positive(f"--{name}-min", lo)
+    check_positive(f"--{name}-max", hi)
+    if n > 1 and not hi > lo:
+        raise JaxrockInputError(f"--{name}-max = {hi:g} must be > --{name}-min = {lo:g}")
+    return np.linspace(lo, hi, n) if n > 1 else np.asarray([lo], dtype=float)
+
+
+def parse_values(name: str, text: str) -> np.ndarray:
+    """A list option: "1,2,5" (values) or "a:b:n" (n values evenly spaced from a to b)."""
+    import re
+
+    from .._validate import JaxrockInputError
+
+    text = text.strip()
+    items = re.split(r"\s*,\s*|\s+", text)
+    if text and "" in items:
+        raise JaxrockInputError(f"{name} = {text!r} has an empty item; expected numbers '1,2,5' or a range 'a:b:n'")
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            a, b, n = float(a), float(b), int(n)
+        else:
+            vals = [float(v) for v in items if v]
+    except ValueError:
+        raise JaxrockInputError(f"{name} = {text!r}; expected numbers '1,2,5' or a range 'a:b:n'") from None
+    if ":" in text:
+        _check_count(f"{name} (a:b:n) n", n)
+        if n > MAX_LIST:
+            raise JaxrockInputError(f"{name} = {text!r}: n = {n} values; valid: at most {MAX_LIST}")
+        return np.linspace(a, b, n)
+    if not vals:
+        raise JaxrockInputError(f"{name} is empty; expected numbers '1,2,5' or a range 'a:b:n'")
+    return np.asarray(vals, dtype=float)
+
+
+def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alpha_base=None, *, undamped=False,
+                eta=None, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None):
+    """The model of a CLI scene: the flags are checked here, the model is built by
+    `batch.scene_model` (the same as a batch row)."""
+    from .._validate import JaxrockInputError
+    from ..io.scenes_file import scene_model
+    from ..geometry import Block
+
+    kind = ModelKind(model)
+    block = Block.from_slenderness(height, tan_alpha, tan_alpha_base)
+    if kind is not ModelKind.spring_flexible:
+        for name, v in (("--E", E), ("--rho", rho), ("--zeta", zeta)):
+            if v is not None:
+                raise JaxrockInputError(f"{name} applies to --model spring-flexible only (the column's material)")
+    if kind is ModelKind.rigid:
+        for name, v in (("--backbone", backbone), ("--smoothing", smoothing)):
+            if v is not None:
+                raise JaxrockInputError(f"{name} applies to the spring models only (the base spring)")
+        if cbar is not None:
+            raise JaxrockInputError("--cbar applies to the spring models only (rigid: --eta or --undamped)")
+        if undamped and eta is not None:
+            raise JaxrockInputError("give --undamped or --eta, not both")
+        return scene_model("rigid", block, eta=1.0 if undamped else eta)
+    if eta is not None:
+        raise JaxrockInputError("--eta applies to the rigid model only (spring: --cbar or --undamped)")
+    if undamped and cbar is not None:
+        raise JaxrockInputError("give --undamped or --cbar, not both")
+    backbone = None if backbone is None else BackboneKind(backbone).value
+    return scene_model(kind.value, block, cbar=0.0 if undamped else cbar, E=E, rho=rho, zeta=zeta, backbone=backbone,
+                       smoothing=smoothing)
+
+
+def _integrator(model: ModelKind, tol: Optional[float]):
+    """`--tol`: generalized-α at that local tolerance for the spring models; None: the default."""
+    if tol is None:
+        return None
+    from .._validate import JaxrockInputError
+    from ..spring import GeneralizedAlpha
+
+    if model == ModelKind.rigid:
+        raise JaxrockInputError("--tol selects the spring model's generalized-α integrator; the rigid model takes none")
+    return GeneralizedAlpha(rtol=tol, atol=tol)
+
+
+def even_batch(n: int, limit: int) -> int:
+    """A batch size that splits n cells into equal batches of at most `limit`, about four or more
+    of them (a progress bar that moves), so that no smaller last batch needs its own compilation.
+    Falls back to `min(n, limit)` when n has no suitable divisor."""
+    if n <= 256:
+        return min(n, limit)
+    k0 = max(4, -(-n // limit))
+    for k in range(k0, k0 + 64):
+        if n % k == 0 and n // k >= 64:
+            return n // k
+    return min(n, limit)
+
+
+def spectrum_summary(spec, seconds: float) -> str:
+    from ..results import STATUS_NAMES
+
+    a = spec.attrs
+    n_a, n_w = spec.max_theta.shape
+    n = n_a * n_w
+    tan_col = float(a["width"]) / float(a["height"])
+    base = "" if abs(tan_col - float(a["tan_alpha"])) < 1e-12 else f" on a base tanα′ = {float(a['tan_alpha']):.4g}"
+    lines = [
+        f"spectrum: {a.get('model')}, {a.get('pulse')}, 2h = {float(a['height']):g} m, tanα = {tan_col:.4g}{base} "
+        f"(rocking α = {float(a['alpha']):.4g} rad, p = {float(a['p']):.4g} rad/s)",
+        f"grid: {n_w} ω_p/p in [{spec.omega_ratio[0]:g}, {spec.omega_ratio[-1]:g}] × {n_a} a_p/(g tanα) in "
+        f"[{spec.accel_ratio[0]:g}, {spec.accel_ratio[-1]:g}] = {n} cells in {seconds:.1f} s ({1e3 * seconds / n:.2f} ms/cell)",
+        f"overturned: {int(spec.overturned.sum())} cells ({100 * spec.overturned.mean():.1f} %), "
+        f"uplifted: {int(spec.uplifted.sum())} ({100 * spec.uplifted.mean():.1f} %)",
+        "status: " + ", ".join(f"{STATUS_NAMES[k]} {int(c)}" for k, c in enumerate(np.bincount(spec.status.ravel(), minlength=len(STATUS_NAMES))) if c),
+    ]
+    for name, b in (("uplift", spec.uplift_boundary), ("overturning", spec.overturn_boundary)):
+        fin = np.isfinite(b)
+        if fin.any():
+            rng = f"{np.min(b[fin]):.3g} … {np.max(b[fin]):.3g}"
+            none = "" if fin.all() else f" ({int((~fin).sum())} ω_p/p columns: none in the grid)"
+            lines.append(f"least {name} a_p/(g tanα): {rng}{none}")
+        else:
+            lines.append(f"least {name} a_p/(g tanα): none in the grid")
+    return "\n".join(lines)
+
+
+def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio, units=None):
+    from .._validate import JaxrockInputError, check_range
+    from ..excitation import PULSES
+
+    if record is not None:
+        for name, v in (("--a-p", a_p), ("--accel-ratio", accel_ratio), ("--omega-p", omega_p), ("--omega-ratio", omega_ratio)):
+            if v is not None:
+                raise JaxrockInputError(f"{name} applies to Ricker pulses, not to --record")
+        check_range("--scale", scale, 0.0, math.inf, hi_open=True)
+        if record.lower() in ("elcentro", "el-centro", "el_centro"):
+            from ..io.records import el_centro
+
+            if units is not None:
+                raise JaxrockInputError("--units applies to --record files; the packaged El Centro record needs none")
+            rec = el_centro()
+        else:
+            from ..io.records import read_record
+
+            if not Path(record).is_file():
+                raise JaxrockInputError(f"--record {record}: file not found")
+            rec = read_record(record) if units is None else read_record(record, units=units)
+        return rec.scaled(scale), f"{rec.name} × {scale:g}"
+    if units is not None:
+        raise JaxrockInputError("--units applies to --record files, not to Ricker pulses")
+    if a_p is not None and accel_ratio is not None:
+        raise JaxrockInputError("give --a-p or --accel-ratio, not both")
+    if omega_p is not None and omega_ratio is not None:
+        raise JaxrockInputError("give --omega-p or --omega-ratio, not both")
+    if a_p is None:
+        accel_ratio = 4.0 if accel_ratio is None else accel_ratio
+        check_range("--accel-ratio", accel_ratio)
+        a_p = accel_ratio * float(block.uplift_acceleration)
+    if omega_p is None:
+        if omega_ratio is None:
+            omega_p = 2 * math.pi
+        else:
+            check_range("--omega-ratio", omega_ratio, 0.0, math.inf, lo_open=True, hi_open=True)
+            omega_p = omega_ratio * float(block.p_r)
+    exc = PULSES[pulse](a_p, omega_p)
+    desc = (f"{pulse} Ricker pulse a_p = {a_p:.4g} m/s² ({a_p / float(block.uplift_acceleration):.4g} g tanα), "
+            f"ω_p = {omega_p:.4g} rad/s ({omega_p / float(block.p_r):.4g} p)")
+    return exc, desc
+
+
+def solution_summary(sol, model) -> str:
+    from ..results import status_names
+
+    a = float(model.block.alpha_r)
+    t_over = float(np.asarray(sol.t_overturn))
+    t_up = float(np.asarray(sol.t_uplift))
+    lines = [
+        f"max θ/α = {float(np.asarray(sol.max_theta)):.6f}",
+        f"overturned: {'yes, at t = %.4f s' % t_over if bool(np.asarray(sol.overturned)) else 'no'}",
+        f"uplifted: {'yes, at t = %.4f s' % t_up if bool(np.asarray(sol.uplifted)) else 'no'}",
+        f"impacts: {int(np.asarray(sol.n_impacts))}",
+        f"status: {status_names(sol.status)}",
+        f"(α = {a:.5g} rad, p = {float(model.block.p_r):.5g} rad/s)",
+    ]
+    return "\n".join(lines)

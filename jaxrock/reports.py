@@ -1,0 +1,144 @@
+"""Reports: the workflows that run an analysis and write its files — numbers (`jaxrock.io`) and
+figures (`jaxrock.plotting`) — for the CLI, the experiments and scripts: the damper calibration
+(table, figure 7, calibrated c̄), a spectrum's netCDF and PNG, a record spectrum's netCDF, CSV and
+PNG."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .analyses.calibration import (CALIBRATION_ANGLES, FIG7_CBARS, FIG7_TAN_ALPHAS, CalibrationResult, PowerLawFit, SpringFamily,
+                                   calibrate_cbar, energy_ratio_grid, fit_power_law, rm_targets, warm_up)
+from .io.tables import write_table
+from .plotting import plot_calibration, plot_energy_ratio, plot_record_spectrum, plot_spectrum
+
+import matplotlib.pyplot as plt  # noqa: E402  (after jaxrock.plotting chose the backend)
+
+
+@dataclass
+class CalibrationReport:
+    """What `calibration_report` computed and wrote (numpy arrays; `table` is a list of row dicts)."""
+
+    result: CalibrationResult
+    fit: PowerLawFit
+    fit_paper_range: PowerLawFit  # tanα ∈ {0.1, 0.2, 0.3}-ish range only (0.1 ≤ tanα ≤ 0.3)
+    table: list[dict]
+    fig7_theta0_over_alpha: np.ndarray
+    fig7_r2: np.ndarray  # (n_tanα, n_c̄, n_θ)
+    files: dict[str, Path] = field(default_factory=dict)
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    def format_table(self) -> str:
+        head = f"{'tanα':>6} {'α [rad]':>8} {'target r²':>10} {'c̄ calib':>9} {'c̄ eq.17':>9} {'ratio':>6} {'residual':>9} {'iters':>5}"
+        rows = [head]
+        for r in self.table:
+            rows.append(
+                f"{r['tan_alpha']:6.3f} {r['alpha']:8.4f} {r['target_r2']:10.4f} {r['cbar_calibrated']:9.4f} "
+                f"{r['cbar_eq17']:9.4f} {r['cbar_calibrated'] / r['cbar_eq17']:6.3f} {r['residual_rms']:9.2e} {r['iterations']:5d}"
+            )
+        rows.append(f"fit over tanα ∈ [{self.table[0]['tan_alpha']:g}, {self.table[-1]['tan_alpha']:g}]: {self.fit}  (paper: k = 0.02, n = 2)")
+        rows.append(f"fit over tanα ∈ [0.1, 0.3]: {self.fit_paper_range}")
+        return "\n".join(rows)
+
+
+def calibration_report(
+    out_dir="out",
+    *,
+    tan_alphas=None,
+    theta0_over_alpha=CALIBRATION_ANGLES,
+    family: SpringFamily | None = None,
+    fig7_theta0_over_alpha=None,
+    progress: bool = True,
+    max_iter: int = 300,
+) -> CalibrationReport:
+    """Calibrate c̄ over tanα ∈ [0.05, 0.35] (default 13 values), fit c̄ = k (α/0.1)^n, and write
+    to `out_dir`: `calibration.csv` (tanα, α, target r², calibrated c̄, eq. 17 c̄, residual, …),
+    `fig07_energy_ratio.png` (r_eq² against θ₀/α for tanα = 0.1, 0.2, 0.3 and c̄ = 0.02, 0.08,
+    0.18, RM r² levels as horizontal lines) and `calibration_cbar.png`. Returns the data
+    (`CalibrationReport.format_table()` gives the printable table)."""
+    family = SpringFamily() if family is None else family
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    ta = np.round(np.linspace(0.05, 0.35, 13), 6) if tan_alphas is None else np.asarray(tan_alphas, dtype=float)
+    xs7 = np.linspace(0.05, 0.98, 32) if fig7_theta0_over_alpha is None else np.asarray(fig7_theta0_over_alpha, dtype=float)
+    seconds = {}
+
+    # compile (and run once) the per-iteration pass first, to report compile and run time apart
+    t0 = time.perf_counter()
+    warm_up(ta, theta0_over_alpha, family)
+    seconds["compile"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    res = calibrate_cbar(ta, theta0_over_alpha=theta0_over_alpha, family=family, progress=progress, max_iter=max_iter)
+    seconds["calibration"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    r7 = np.asarray(energy_ratio_grid(FIG7_TAN_ALPHAS, FIG7_CBARS, xs7, family=family))
+    targets7 = np.asarray(rm_targets(family, FIG7_TAN_ALPHAS))
+    seconds["figure7"] = time.perf_counter() - t0
+
+    fit = fit_power_law(res.alpha, res.cbar)
+    sel = (np.asarray(res.tan_alpha) >= 0.1 - 1e-9) & (np.asarray(res.tan_alpha) <= 0.3 + 1e-9)
+    fit_pr = fit_power_law(np.asarray(res.alpha)[sel], np.asarray(res.cbar)[sel]) if sel.sum() >= 3 else fit
+
+    table = []
+    for i in range(len(ta)):
+        table.append(
+            dict(
+                tan_alpha=float(res.tan_alpha[i]),
+                alpha=float(res.alpha[i]),
+                target_r2=float(res.target[i]),
+                cbar_calibrated=float(res.cbar[i]),
+                cbar_eq17=float(res.cbar_eq17[i]),
+                residual_rms=float(res.residual[i]),
+                bias=float(res.bias[i]),
+                r2_min=float(np.min(res.r2[i])),
+                r2_max=float(np.max(res.r2[i])),
+                iterations=int(res.iterations[i]),
+                converged=bool(res.converged[i]),
+            )
+        )
+    files = {
+        "table": out / "calibration.csv",
+        "figure7": out / "fig07_energy_ratio.png",
+        "calibration": out / "calibration_cbar.png",
+    }
+    write_table(files["table"], table, footer=f"fit: {fit}; paper eq. 17: k = 0.02, n = 2")
+    plt.close(plot_energy_ratio(FIG7_TAN_ALPHAS, FIG7_CBARS, xs7, r7, targets7, path=files["figure7"]))
+    plt.close(plot_calibration(res, fit, path=files["calibration"]))
+    return CalibrationReport(
+        result=res,
+        fit=fit,
+        fit_paper_range=fit_pr,
+        table=table,
+        fig7_theta0_over_alpha=xs7,
+        fig7_r2=r7,
+        files=files,
+        seconds=seconds,
+    )
+
+
+def spectrum_files(spec, out: Path, title: str) -> tuple[Path, Path]:
+    """Write a `Spectrum` as `<out>.nc` (netCDF, `Spectrum.save`) and its figure as `<out>.png`."""
+    nc = spec.save(Path(f"{out}.nc"))
+    png = Path(f"{out}.png")
+    plt.close(plot_spectrum(spec, title=title, path=png))
+    return nc, png
+
+
+def record_spectrum_files(rs, out: Path, label: str, title: str) -> tuple[Path, Path, Path]:
+    """Write a `RecordSpectrum` as `<out>.nc`, `<out>.csv` (height, least scale, bracket's lower end)
+    and its figure as `<out>.png`."""
+    nc = rs.save(Path(f"{out}.nc"))
+    csv_path = Path(f"{out}.csv")
+    rows = [{"height": float(h), "least_scale": float(s), "bracket_low": float(lo)} for h, s, lo in zip(rs.height, rs.scale, rs.bracket_low)]
+    write_table(csv_path, rows)
+    png = Path(f"{out}.png")
+    plt.close(plot_record_spectrum([rs], [label], path=png, title=title))
+    return nc, csv_path, png
+
+
+__all__ = ["CalibrationReport", "calibration_report", "spectrum_files", "record_spectrum_files"]
