@@ -156,7 +156,7 @@ def study(name, scenes, flexible, error_integrator, default_integrator):
 
 
 def gradients() -> None:
-    from jaxrock.analyses.calibration import SpringFamily, energy_ratio
+    from jaxrock.analyses.free_rocking import SpringFamily, energy_ratio
 
     out("# bench_backbone --part gradients: derivatives through the backbone, against central differences")
     rng = np.random.default_rng(11)

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .analyses.calibration import (CALIBRATION_ANGLES, FIG7_CBARS, FIG7_TAN_ALPHAS, CalibrationResult, PowerLawFit, SpringFamily,
-                                   calibrate_cbar, energy_ratio_grid, fit_power_law, rm_targets, warm_up)
+from .analyses.calibration import CALIBRATION_ANGLES, CalibrationResult, PowerLawFit, calibrate_cbar, fit_power_law, rm_targets, warm_up
+from .analyses.free_rocking import FIG7_CBARS, FIG7_TAN_ALPHAS, SpringFamily, energy_ratio_grid
 from .io.tables import write_table
 from .plotting import plot_calibration, plot_energy_ratio, plot_record_spectrum, plot_spectrum
 

@@ -13,16 +13,8 @@ import numpy as np
 import pytest
 
 import jaxrock  # noqa: F401  (float64)
-from jaxrock.analyses.calibration import (
-    CALIBRATION_ANGLES,
-    SpringFamily,
-    calibrate_cbar,
-    energy_ratio,
-    energy_ratio_grid,
-    fit_power_law,
-    free_cycle,
-    rm_target,
-)
+from jaxrock.analyses.calibration import CALIBRATION_ANGLES, calibrate_cbar, fit_power_law
+from jaxrock.analyses.free_rocking import SpringFamily, energy_ratio, energy_ratio_grid, free_cycle, rm_target
 from jaxrock.geometry import Block
 
 TAN = (0.1, 0.2, 0.3)

@@ -154,7 +154,7 @@ def test_first_period_and_rayleigh_coefficients():
     assert float(a1) * (2 * math.pi / T1) / 2 == pytest.approx(0.02, rel=1e-12)
     with pytest.raises(JaxrockInputError, match="no column"):
         SpringModel(blk).first_period()
-    assert jaxrock.energy_ratio_grid is jaxrock.analyses.calibration.energy_ratio_grid
+    assert jaxrock.energy_ratio_grid is jaxrock.analyses.free_rocking.energy_ratio_grid
 
 
 def test_kinematics_eq5_eq7_flexible_rigid_rotation():

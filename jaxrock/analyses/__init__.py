@@ -3,11 +3,13 @@
 - `engine`: the batch engine — summaries of a batch of scenes through the models' steppers;
 - `spectra`: overturning spectra of pulses (`overturning_spectrum`, `refine_boundaries`) and the
   least overturning scale of a record (`record_overturning_scale`);
+- `free_rocking`: the spring model's energy ratio per free-rocking cycle (figure 7);
 - `calibration`: the damper c̄ calibrated by gradient against the rigid model's energy loss (eq. 17);
 - `scenes`: a scenes file run row by row, vmapped by structure (`run_scenes`).
 """
 
-from .calibration import CalibrationResult, calibrate_cbar, energy_ratio, energy_ratio_grid, fit_power_law, rm_target
+from .calibration import CalibrationResult, calibrate_cbar, fit_power_law
+from .free_rocking import energy_ratio, energy_ratio_grid, rm_target
 from .engine import run_batch
 from .scenes import run_scenes
 from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, refine_boundaries

@@ -17,8 +17,8 @@ from .. import interrupt
 from .._validate import JaxrockInputError
 from ..io import provenance
 from ..io.files import exclusive, same_file
-from ..io.scenes_file import (RESULT_COLUMNS, Scenes, append_results, read_done, read_scenes, result_rows, results_path_for,
-                              rewrite_results, start_results)
+from ..io.results_file import append_results, read_done, result_rows, results_path_for, rewrite_results, start_results
+from ..io.scenes_file import RESULT_COLUMNS, Scenes, read_scenes
 from ..results import STATUS_NAMES
 from .engine import run_stacked
 

@@ -210,7 +210,7 @@ def batch(
     """
     from .._validate import check_writable
     from ..analyses.scenes import run_scenes
-    from ..io.scenes_file import count_results, results_path_for
+    from ..io.results_file import count_results, results_path_for
     from ..interrupt import Interrupted
 
     results = results_path_for(scenes, results)

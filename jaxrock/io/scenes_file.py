@@ -61,9 +61,7 @@ from __future__ import annotations
 
 import csv
 import difflib
-import io
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -76,8 +74,7 @@ from .._validate import JaxrockInputError, check_range, in_range, is_number, wit
 from ..excitation import PULSES, Record
 from ..geometry import TAN_ALPHA_MIN, Block
 from ..model import MODEL_KINDS
-from ..results import STATUS_NAMES
-from .files import output_stem, write_atomically
+from .tables import csv_text
 
 BUILTIN_RECORDS = ("elcentro",)
 INPUT_COLUMNS = (
@@ -338,17 +335,6 @@ def _refusal(build) -> str:
     return "a parameter is outside its valid range"  # pragma: no cover - the limits agree with the constructors
 
 
-def _text(path: Path, what: str) -> io.StringIO:
-    """A CSV file's text, for `csv` (newline=""): a file that is not UTF-8 text is refused in one line."""
-    try:
-        text = Path(path).read_bytes().decode("utf-8-sig")  # a spreadsheet's byte-order mark is not part of the header
-    except UnicodeDecodeError as e:
-        raise JaxrockInputError(f"{path}: the {what} file is not UTF-8 text (byte {e.start}: {e.reason}); expected a CSV") from None
-    if "\x00" in text:
-        raise JaxrockInputError(f"{path}: the {what} file is binary (NUL bytes); expected a CSV")
-    return io.StringIO(text, newline="")
-
-
 def read_scenes(path) -> Scenes:
     """Read and check every row of a scenes CSV (see the module docstring).
 
@@ -357,7 +343,7 @@ def read_scenes(path) -> Scenes:
     path = Path(path)
     if not path.is_file():
         raise JaxrockInputError(f"{path}: scenes file not found")
-    with _text(path, "scenes") as fh:
+    with csv_text(path, "scenes") as fh:
         reader = csv.reader(fh)
         try:
             header = next(reader)
@@ -398,108 +384,4 @@ def read_scenes(path) -> Scenes:
     return Scenes(header, np.asarray(rows), values, groups, params, records)
 
 
-# ----------------------------------------------------------------------------------------------
-# results file
-# ----------------------------------------------------------------------------------------------
-def _fmt(x) -> str:
-    x = float(x)
-    if math.isinf(x):
-        return "inf" if x > 0 else "-inf"
-    return repr(x)
-
-
-def result_rows(sol, k: int) -> list[dict]:
-    out = []
-    status = np.asarray(sol.status._value)
-    for i in range(k):
-        out.append(
-            {
-                "max_theta": _fmt(np.asarray(sol.max_theta)[i]),
-                "overturned": str(int(np.asarray(sol.overturned)[i])),
-                "t_overturn": _fmt(np.asarray(sol.t_overturn)[i]),
-                "uplifted": str(int(np.asarray(sol.uplifted)[i])),
-                "t_uplift": _fmt(np.asarray(sol.t_uplift)[i]),
-                "n_impacts": str(int(np.asarray(sol.n_impacts)[i])),
-                "status": STATUS_NAMES[int(status[i])],
-            }
-        )
-    return out
-
-
-def read_done(results: Path, header: list[str], scenes: Scenes) -> dict[int, dict]:
-    """Finished rows of an earlier run (row number → result row), checked against the scenes."""
-    done: dict[int, dict] = {}
-    if not results.exists():
-        return done
-    with _text(results, "results") as fh:
-        reader = csv.DictReader(fh)
-        expected = ["row", *header, *RESULT_COLUMNS]
-        if reader.fieldnames is None:
-            return done
-        if list(reader.fieldnames) != expected:
-            raise JaxrockInputError(
-                f"{results}: its columns {reader.fieldnames} do not match this scenes file "
-                f"(expected {expected}); use another results file or run without --resume"
-            )
-        by_row = {int(r): v for r, v in zip(scenes.rows, scenes.values)}
-        for rec in reader:
-            try:
-                r = int(rec["row"])
-            except (TypeError, ValueError):
-                continue  # a partly written last line of an interrupted run
-            if r not in by_row or any(rec.get(c) in (None, "") for c in ("status", "max_theta")):
-                continue
-            if any(rec[h] != by_row[r][h] for h in header):
-                raise JaxrockInputError(
-                    f"{results}: row {r} was computed for other inputs than row {r} of the scenes file; "
-                    f"use another results file or run without --resume"
-                )
-            done[r] = rec
-    return done
-
-
-def count_results(results) -> int:
-    """Finished rows in a results file (0 when it is missing or unreadable)."""
-    try:
-        with _text(Path(results), "results") as fh:
-            return sum(1 for rec in csv.DictReader(fh) if rec.get("status") in STATUS_NAMES)
-    except (OSError, JaxrockInputError):
-        return 0
-
-
-def results_path_for(scenes_path, results_path) -> Path:
-    """The results file: `results_path`, or inside it when it is a folder (or ends with a
-    separator) as `<scenes stem>_results.csv`."""
-    return output_stem(results_path, f"{Path(scenes_path).stem}_results.csv")
-
-
-def start_results(results: Path, fields: list[str]) -> None:
-    """A fresh results file: its header line."""
-    results.parent.mkdir(parents=True, exist_ok=True)
-    with open(results, "w", newline="", encoding="utf-8") as fh:
-        csv.DictWriter(fh, fieldnames=fields).writeheader()
-
-
-def append_results(results: Path, fields: list[str], records: list[dict]) -> None:
-    """Append finished rows, flushed to disk (an interrupted run keeps them)."""
-    with open(results, "a", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=fields)
-        w.writerows(records)
-        fh.flush()
-        os.fsync(fh.fileno())
-
-
-def rewrite_results(results: Path, fields: list[str], rows: dict[int, dict]) -> None:
-    """The finished file: every row in row order, written atomically."""
-
-    def write(tmp):
-        with open(tmp, "w", newline="", encoding="utf-8") as fh:
-            w = csv.DictWriter(fh, fieldnames=fields)
-            w.writeheader()
-            for r in sorted(rows):
-                w.writerow({k: rows[r][k] for k in fields})
-
-    write_atomically(results, write)
-
-
-__all__ = ["read_scenes", "Scenes", "models", "scene_model", "count_results", "results_path_for", "INPUT_COLUMNS", "RESULT_COLUMNS"]
+__all__ = ["read_scenes", "Scenes", "models", "scene_model", "INPUT_COLUMNS", "RESULT_COLUMNS"]

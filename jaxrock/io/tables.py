@@ -1,12 +1,15 @@
 """Tables as CSV files: one row per dict, numbers written exactly (`repr`: a float read back is the
-float written; `inf` for infinities), an optional `# ` footer line; written atomically."""
+float written; `inf` for infinities), an optional `# ` footer line; written atomically. Read back as
+checked UTF-8 text (`csv_text`)."""
 
 from __future__ import annotations
 
 import csv
+import io
 import math
 from pathlib import Path
 
+from .._validate import JaxrockInputError
 from .files import write_atomically
 
 
@@ -29,3 +32,14 @@ def write_table(path, rows: list[dict], *, footer: str | None = None) -> Path:
                 fh.write(f"# {footer}\n")
 
     return write_atomically(Path(path), write)
+
+
+def csv_text(path: Path, what: str) -> io.StringIO:
+    """A CSV file's text, for `csv` (newline=""): a file that is not UTF-8 text is refused in one line."""
+    try:
+        text = Path(path).read_bytes().decode("utf-8-sig")  # a spreadsheet's byte-order mark is not part of the header
+    except UnicodeDecodeError as e:
+        raise JaxrockInputError(f"{path}: the {what} file is not UTF-8 text (byte {e.start}: {e.reason}); expected a CSV") from None
+    if "\x00" in text:
+        raise JaxrockInputError(f"{path}: the {what} file is binary (NUL bytes); expected a CSV")
+    return io.StringIO(text, newline="")

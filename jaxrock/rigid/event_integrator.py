@@ -1,7 +1,6 @@
-"""The rigid rocking model (RM): Housner's equation with impacts, eqs. 1–3 and 22–27.
-
-The motion is a sequence of segments, run by a bounded loop (static bound, reported as
-`Status.max_iterations` if hit):
+"""The rigid model's event-driven integration (`EventIntegrator`, `RigidStepper`): the motion as a
+sequence of segments, run by a bounded loop (static bound, reported as `Status.max_iterations` if
+hit):
 
 - **rest** — the block stays at θ = 0 while |üg| < g tanα′; the uplift time is found exactly
   by `excitation.next_exceedance` and the block uplifts on side s = −sign(üg) (SPEC);
@@ -30,21 +29,23 @@ overturning time.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float
+from jaxtyping import Array
 
-from ._rootfind import SafeNewton
-from .bookkeeping import Record, Watch
-from ._validate import JaxrockInputError, Limit, check_limits
-from .excitation import AbstractExcitation
-from .geometry import G, Block
-from .model import AbstractIntegrator, AbstractModel, AbstractStepper, Schedule, check_autodiff, diffrax_adjoint, diffrax_status, register_model_kind
-from .results import Save, Solution, Status
+from .._rootfind import SafeNewton
+from ..bookkeeping import Record
+from ..excitation import AbstractExcitation
+from ..geometry import G
+from ..model import AbstractIntegrator, AbstractStepper, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
+from ..results import Save, Solution, Status
+
+if TYPE_CHECKING:
+    from .model import RigidModel
 
 _REST, _ROCKING, _OVERTURNED = 0, 1, 2
 
@@ -89,78 +90,6 @@ class EventIntegrator(AbstractIntegrator):
     def stepper(self, model: "RigidModel", system=None, save: Save | None = None, t1=None) -> "RigidStepper":
         """`AbstractIntegrator.stepper`: the segment loop, one segment or window per step."""
         return RigidStepper(model, self, save, t1)
-
-
-class RigidModel(AbstractModel):
-    """Housner's rigid rocking block (eq. 2), or a rigid column on an extended rigid base (eq. 22).
-
-    - `block`: the geometry (`Block`); the rocking quantities α′, p′, η′ are taken from it.
-    - `eta`: angular-velocity factor across an impact; None → the block's η′ (eq. 3); 1 → undamped.
-    - `threshold`: overturned when |θ| ≥ threshold·α′ (default 1).
-    """
-
-    block: Block
-    eta: Float[Array, ""] | None = None
-    threshold: Float[Array, ""] = 1.0
-
-    def __check_init__(self):
-        if not isinstance(self.block, Block):
-            raise JaxrockInputError(f"block must be a jaxrock.Block, got {type(self.block).__name__}")
-        check_limits(self.limits())
-
-    def limits(self) -> tuple[Limit, ...]:
-        eta = () if self.eta is None else (Limit("eta (impact velocity ratio)", self.eta, 0.0, 1.0),)
-        return (*eta, Limit("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True))
-
-    @property
-    def restitution(self):
-        return self.block.eta_r if self.eta is None else jnp.asarray(self.eta, dtype=float)
-
-    @property
-    def history_fields(self):
-        return ("theta", "omega")
-
-    def default_integrator(self) -> EventIntegrator:
-        return EventIntegrator()
-
-    def acceleration(self, t, theta, side, excitation: AbstractExcitation):
-        """θ̈ about the corner on `side` (±1), eq. 2 / eq. 22."""
-        a, p = self.block.alpha_r, self.block.p_r
-        phi = side * a - theta
-        return -(p**2) * (jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
-
-    def _free(self, theta, omega, side):
-        """(overturns, next peak |θ| [rad]) of free rocking from (θ, θ̇) on `side` (module doc)."""
-        a, p, eta = self.block.alpha_r, self.block.p_r, self.restitution
-        energy = 0.5 * omega**2 + p**2 * (jnp.cos(a - jnp.abs(theta)) - jnp.cos(a))
-        energy = jnp.where(side * omega < 0, eta**2 * energy, energy)
-        c = jnp.cos(a) + energy / p**2
-        over = c >= jnp.cos((1 - self.threshold) * a)
-        # double where: the masked branch must not see c ≥ 1, where arccos′ = −∞ and its zero
-        # cotangent would become 0·∞ = NaN under `grad`; cos α is a safe stand-in (peak 0)
-        return over, a - jnp.arccos(jnp.where(over, jnp.cos(a), jnp.maximum(c, -1.0)))
-
-    def free_peak(self, theta, omega, side):
-        """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side` (see module doc):
-        the threshold if it overturns."""
-        over, peak = self._free(theta, omega, side)
-        return jnp.where(over, self.threshold, peak / self.block.alpha_r)
-
-    def free_rotation(self, theta, omega, side):
-        """The same next peak as a rotation |θ| [rad] (threshold·α′ if it overturns)."""
-        over, peak = self._free(theta, omega, side)
-        return jnp.where(over, self.threshold * self.block.alpha_r, peak)
-
-    def watch(self, system=None) -> Watch:
-        """The levels a run is watched against (`jaxrock.bookkeeping`): overturning at threshold·α′;
-        uplift as soon as |θ| > 0 (the block leaves rest when |üg| > g tanα′)."""
-        alpha = self.block.alpha_r
-        return Watch(alpha=alpha, threshold=self.threshold, overturn=self.threshold * alpha, uplift=jnp.zeros_like(alpha))
-
-    def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> "RigidStepper":
-        if not isinstance(integrator, EventIntegrator):
-            raise JaxrockInputError(f"RigidModel needs an EventIntegrator, got {type(integrator).__name__}")
-        return integrator.stepper(self, None, save, t1)  # the rigid model prepares nothing
 
 
 class _Carry(eqx.Module):
@@ -460,12 +389,3 @@ def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, 
         rec = rec.saw_peak(still, model.free_rotation(c.theta, c.omega, c.side))
     return model.watch().solution(rec, status, n_impacts=c.n_impacts, ts=None if summary_only else save.ts,
                                   history=c.hist, n_iterations=c.n_segments)
-
-
-def _scenes_file_model(block: Block, eta=None) -> RigidModel:
-    """A scenes file's rigid model: η always an array (the block's η′ by default), so that rows
-    with and without `eta` share one batch."""
-    return RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
-
-
-register_model_kind("rigid", _scenes_file_model, ("eta",), "Housner's rigid block (RM)")
