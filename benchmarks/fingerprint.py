@@ -3,7 +3,7 @@
     python benchmarks/fingerprint.py OUT.npz                 # record (e.g. on the commit before)
     python benchmarks/fingerprint.py NEW.npz --compare OUT.npz  # record again and compare bit for bit
 
-87 arrays: 6 × 6 pulse spectra of the rigid model, the quasi-rigid spring model (default Tsit5 and
+88 arrays: 6 × 6 pulse spectra of the rigid model, the quasi-rigid spring model (default Tsit5 and
 generalized-α 1e-6) and a 4-element flexible column (3 × 3); histories and summaries of one pulse
 for each (every history field); reverse- and forward-mode gradients of max θ/α. About 3 minutes on
 2 CPU cores. Exit code 1 when any array differs (each is named with its largest difference).
