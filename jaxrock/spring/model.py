@@ -135,7 +135,7 @@ class SpringModel(AbstractModel):
     def flexible(self) -> bool:
         return self.column is not None
 
-    # -- mechanics ------------------------------------------------------------------------------
+    # -- mass, period, damping, pushover -----------------------------------------------------------
     def mass(self):
         """Column mass m [kg] (per unit out-of-plane thickness for the default section)."""
         if self.column is None:
@@ -214,7 +214,7 @@ class SpringModel(AbstractModel):
 
     # -- public pieces for calibration / custom solves --------------------------------------------
     def vector_field(self, t, y, excitation: AbstractExcitation):
-        """dy/dt of the first-order form y = [q, v] (q[0] = θ). Prepares the mechanics on each call;
+        """dy/dt of the first-order form y = [q, v] (q[0] = θ). Assembles the system on each call;
         inside loops prefer `self.system().vector_field` or `SpringIntegrator.solve`."""
         return self.system().vector_field(t, y, excitation)
 
@@ -241,7 +241,7 @@ class SpringModel(AbstractModel):
     # -- run ------------------------------------------------------------------------------------
     def stepper(self, integrator, save=None, t1=None):
         """The run as an `AbstractStepper` of `integrator` (an `AbstractSpringIntegrator`), on the
-        mechanics prepared here once (energy integrals tracked when `save` asks for energies)."""
+        system assembled here once (energy integrals tracked when `save` asks for energies)."""
         if not isinstance(integrator, AbstractSpringIntegrator):
             raise JaxrockInputError(f"SpringModel needs a SpringIntegrator or GeneralizedAlpha, got {type(integrator).__name__}")
         fields = () if save is None else save.fields
