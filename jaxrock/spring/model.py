@@ -184,28 +184,7 @@ class SpringModel(AbstractModel):
         tanα/cosθ − tanθ, once the spring has yielded (|θ| beyond its pre-yield band)."""
         if self.fixed_base:
             raise JaxrockInputError("pushover: a fixed-base column (fixed_base=True) does not rock")
-        theta = jnp.asarray(theta, dtype=float)
-        mech = self.system()
-        if mech.n is None:
-            f = lambda th: jax.grad(mech.potential)(jnp.atleast_1d(th))[0] / (mech.m * G * mech.h * jnp.cos(th))
-            return jnp.vectorize(f)(theta)
-        r = mech.r * G  # generalized force of a unit lateral acceleration ratio (F/(m g) = 1)
-        grad_v = jax.grad(mech.potential)
-        scale = jnp.tile(jnp.array([1.0, 1.0, 0.0]), mech.n) * (mech.h - 1.0) + 1.0  # h for translations
-
-        def one(th):
-            q0 = mech.initial_state(th)[: mech.ndof]
-            lam0 = pushover_eq9(th, mech.alpha_r)
-
-            def residual(x):
-                return grad_v(q0.at[1:].add(x[:-1] * scale)) - x[-1] * r
-
-            x = jnp.concatenate([jnp.zeros(mech.ndof - 1), jnp.atleast_1d(lam0)])
-            for _ in range(8):  # Newton: quadratic from the rigidly rotated, preloaded column
-                x = x - _linalg.solve(jax.jacfwd(residual)(x), residual(x))
-            return x[-1]
-
-        return jnp.vectorize(one)(theta)
+        return _pushover(self.system(), jnp.asarray(theta, dtype=float))
 
     def system(self, track_energy: bool = False) -> SpringSystem:
         """The assembled system of this model (`SpringSystem`): its arrays computed once; with
@@ -267,6 +246,31 @@ class SpringModel(AbstractModel):
         alpha_r = self.block.alpha_r
         return Watch(alpha=alpha_r, threshold=self.threshold,
                      overturn=self.overturn_rotation, uplift=system.theta_up)
+
+
+@eqx.filter_jit
+def _pushover(system: SpringSystem, theta):
+    """`SpringModel.pushover` on the assembled system (compiled once per column structure)."""
+    if system.n is None:
+        f = lambda th: jax.grad(system.potential)(jnp.atleast_1d(th))[0] / (system.m * G * system.h * jnp.cos(th))
+        return jnp.vectorize(f)(theta)
+    r = system.r * G  # generalized force of a unit lateral acceleration ratio (F/(m g) = 1)
+    grad_v = jax.grad(system.potential)
+    scale = jnp.tile(jnp.array([1.0, 1.0, 0.0]), system.n) * (system.h - 1.0) + 1.0  # h for translations
+
+    def one(th):
+        q0 = system.initial_state(th)[: system.ndof]
+        lam0 = pushover_eq9(th, system.alpha_r)
+
+        def residual(x):
+            return grad_v(q0.at[1:].add(x[:-1] * scale)) - x[-1] * r
+
+        x = jnp.concatenate([jnp.zeros(system.ndof - 1), jnp.atleast_1d(lam0)])
+        for _ in range(8):  # Newton: quadratic from the rigidly rotated, preloaded column
+            x = x - _linalg.solve(jax.jacfwd(residual)(x), residual(x))
+        return x[-1]
+
+    return jnp.vectorize(one)(theta)
 
 
 def _quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -> SpringModel:
