@@ -16,22 +16,23 @@ from .files import output_stem, write_atomically
 from .scenes_file import RESULT_COLUMNS, Scenes
 from .tables import cell, csv_text
 
+
 def result_rows(sol, k: int) -> list[dict]:
-    out = []
-    status = np.asarray(sol.status._value)
-    for i in range(k):
-        out.append(
-            {
-                "max_theta": cell(float(np.asarray(sol.max_theta)[i])),
-                "overturned": str(int(np.asarray(sol.overturned)[i])),
-                "t_overturn": cell(float(np.asarray(sol.t_overturn)[i])),
-                "uplifted": str(int(np.asarray(sol.uplifted)[i])),
-                "t_uplift": cell(float(np.asarray(sol.t_uplift)[i])),
-                "n_impacts": str(int(np.asarray(sol.n_impacts)[i])),
-                "status": STATUS_NAMES[int(status[i])],
-            }
-        )
-    return out
+    """The result cells of the first `k` lanes of a batch's `Solution`."""
+    col = {f: np.asarray(getattr(sol, f))[:k] for f in ("max_theta", "overturned", "t_overturn", "uplifted", "t_uplift", "n_impacts")}
+    status = np.asarray(sol.status._value)[:k]
+    return [
+        {
+            "max_theta": cell(float(col["max_theta"][i])),
+            "overturned": str(int(col["overturned"][i])),
+            "t_overturn": cell(float(col["t_overturn"][i])),
+            "uplifted": str(int(col["uplifted"][i])),
+            "t_uplift": cell(float(col["t_uplift"][i])),
+            "n_impacts": str(int(col["n_impacts"][i])),
+            "status": STATUS_NAMES[int(status[i])],
+        }
+        for i in range(k)
+    ]
 
 
 def read_done(results: Path, header: list[str], scenes: Scenes) -> dict[int, dict]:

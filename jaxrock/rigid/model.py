@@ -55,7 +55,7 @@ class RigidModel(AbstractModel):
         return -(p**2) * (jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
 
     def _free(self, theta, omega, side):
-        """(overturns, next peak |θ| [rad]) of free rocking from (θ, θ̇) on `side` (module doc)."""
+        """(overturns, next peak |θ| [rad]) of free rocking from (θ, θ̇) on `side` (`jaxrock.rigid.event_integrator`)."""
         a, p, eta = self.block.alpha_r, self.block.p_r, self.restitution
         energy = 0.5 * omega**2 + p**2 * (jnp.cos(a - jnp.abs(theta)) - jnp.cos(a))
         energy = jnp.where(side * omega < 0, eta**2 * energy, energy)
@@ -66,7 +66,7 @@ class RigidModel(AbstractModel):
         return over, a - jnp.arccos(jnp.where(over, jnp.cos(a), jnp.maximum(c, -1.0)))
 
     def free_peak(self, theta, omega, side):
-        """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side` (see module doc):
+        """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side` (`jaxrock.rigid.event_integrator`):
         the threshold if it overturns."""
         over, peak = self._free(theta, omega, side)
         return jnp.where(over, self.threshold, peak / self.block.alpha_r)

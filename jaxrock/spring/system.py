@@ -77,10 +77,14 @@ class SpringSystem(eqx.Module):
         flexural P-Δ softening of a flexible column."""
         return 1.0 if self.n is None else 0.9
 
+    def settle_energy(self, peak):
+        """`settle_margin` × the rigid potential at the peak |θ| so far: below this mechanical energy
+        |θ| can never reach that peak again (`jaxrock.spring`)."""
+        return self.settle_margin * self.rigid_potential(peak)
+
     def settled(self, energy, peak):
-        """A summary's stop: the mechanical energy is below `settle_margin` × the rigid potential at
-        the peak |θ| so far, so |θ| can never reach that peak again (`jaxrock.spring`)."""
-        return energy < self.settle_margin * self.rigid_potential(peak)
+        """A summary's stop: the mechanical energy below `settle_energy(peak)`."""
+        return energy < self.settle_energy(peak)
 
     @property
     def theta_up(self):
