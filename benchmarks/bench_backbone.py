@@ -78,7 +78,7 @@ def batch(scenes, idx, flexible, backbone, smoothing):
         blk = Block.from_slenderness(h2, ta)
         col = Column.concrete() if flexible else None
         model = SpringModel(blk, col, backbone=backbone, smoothing=smoothing)
-        return model, (ar * jr.G * blk.tan_alpha, wr * blk.p_r)
+        return model, jr.pulse_of_ratios(blk, ar, wr)
 
     arr = lambda k: jnp.asarray(scenes[k][idx])
     return jax.vmap(one)(arr("height"), arr("tan_alpha"), arr("wr"), arr("ar"))
@@ -169,7 +169,7 @@ def gradients() -> None:
         for name, integ in (("generalized-α 1e-6", GeneralizedAlpha(1e-6, 1e-6)), ("Tsit5 1e-10", tsit5_fwd)):
             def peak(a_r, h2, ta, wr):
                 blk = Block.from_slenderness(h2, ta)
-                ex = RickerPulse(a_r * blk.uplift_acceleration, wr * blk.p_r)
+                ex = RickerPulse(*jr.pulse_of_ratios(blk, a_r, wr))
                 return jr.simulate(SpringModel(blk, backbone=backbone, smoothing=s), ex, integrator=integ).max_theta
 
             d = np.asarray(jax.vmap(jax.jacfwd(peak))(*scenes)) * np.asarray(scenes[0])

@@ -96,8 +96,7 @@ def main():
     out(f"{'model':22s} {'run':34s} {'ms/scene':>9s} {'× forward':>9s} {'compile s':>9s}")
     for name, model, integs in cases():
         blk = model.block
-        a = jnp.asarray(ar * float(blk.uplift_acceleration))
-        w = jnp.asarray(wr * float(blk.p_r))
+        a, w = (jnp.asarray(x) for x in jr.pulse_of_ratios(blk, ar, wr))
 
         def peak(a_p, omega_p, integ):
             return jr.simulate(model, jr.RickerPulse(a_p, omega_p), integrator=integ).max_theta
@@ -120,7 +119,7 @@ def main():
 def smoothness(n: int = 2001):
     blk = jr.Block.from_slenderness(10.0, 0.2)
     model = SpringModel(blk, Column.concrete())
-    a0, w = 2 * jr.G * 0.2, 3 * float(blk.p_r)
+    a0, w = (float(x) for x in jr.pulse_of_ratios(blk, 2.0, 3.0))
     out()
     out(f"# flexible SM smoothness: a_p = {a0:.4f} m/s² ± 1 % in {n - 1} intervals, ω_p = 3p")
     out(f"{'tol':>6s} {'crossing':>8s} {'jacfwd':>9s} {'jumps':>6s} {'median jump':>12s} {'max jump':>9s}   central differences at 1e-6, 1e-5, 1e-4, 1e-3")
@@ -151,7 +150,7 @@ def bias(n_one: int = 64, n_flex: int = 8, points: int = 21, span: float = 1e-3)
         def peak(a_r, h, ta, wr):
             blk = jr.Block.from_slenderness(h, ta)
             model = SpringModel(blk, column, n_elements=4)
-            return jr.simulate(model, jr.RickerPulse(a_r * blk.uplift_acceleration, wr * blk.p_r), integrator=integ).max_theta
+            return jr.simulate(model, jr.RickerPulse(*jr.pulse_of_ratios(blk, a_r, wr)), integrator=integ).max_theta
 
         return peak
 

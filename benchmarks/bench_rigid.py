@@ -63,11 +63,10 @@ def main() -> None:
     blk = jr.Block.from_slenderness(10.0, 0.2)
     eta = blk.eta_r
     model = jr.RigidModel(blk, eta=eta)
-    p, tana = float(blk.p_r), float(blk.tan_alpha)
     wr = np.linspace(1.0, 15.0, args.grid)
     ar = np.linspace(0.5, 10.0, args.grid)
     A, W = np.meshgrid(ar, wr, indexing="ij")  # (n_accel, n_omega)
-    a_p, w_p = (A * G * tana).ravel(), (W * p).ravel()
+    a_p, w_p = (np.asarray(x).ravel() for x in jr.pulse_of_ratios(blk, A, W))
     ncell = a_p.size
     rng = np.random.default_rng(args.seed)
     sub = np.sort(rng.choice(ncell, size=min(args.n, ncell), replace=False))
@@ -166,7 +165,7 @@ def main() -> None:
         f"(max {times.max() * 1e3:.1f} ms, median {np.median(times) * 1e3:.1f} ms);"
         f" jaxrock loop iterations {iters.max() / np.median(iters):.1f}x (max {iters.max()}, median {np.median(iters):.0f})")
     kmax = int(np.argmax(iters))
-    out(f"  jaxrock's slowest cell: a_p/(g tanα) = {a_p[kmax] / (G * tana):.2f}, ω_p/p = {w_p[kmax] / p:.2f},"
+    out(f"  jaxrock's slowest cell: a_p/(g tanα) = {float(jr.ratios_of_pulse(blk, a_p[kmax], w_p[kmax])[0]):.2f}, ω_p/p = {float(jr.ratios_of_pulse(blk, a_p[kmax], w_p[kmax])[1]):.2f},"
         f" {int(np.asarray(s_def.n_impacts)[kmax])} impacts, max θ/α = {float(ref_theta[kmax]):.3f}")
 
     # --- work-precision --------------------------------------------------------------------------

@@ -22,7 +22,7 @@ print(f"{'fig':>4} {'tanα':>5} {'RM':>8} {'SM':>8} {'SM+ΔI':>8}   (max |θ|/α
 for fig, damped in ((5, False), (8, True)):
     for tan_a in (0.1, 0.2, 0.3):
         block = jr.Block.from_slenderness(10.0, tan_a)
-        pulse = jr.RickerPulse(4 * jr.G * tan_a, 2 * np.pi)
+        pulse = jr.RickerPulse(jr.pulse_of_ratios(block, 4.0, 1.0)[0], 2 * np.pi)
         ts = np.linspace(float(pulse.t_start), float(pulse.t_start) + 10.0, 2001)
         models = {
             "RM": jr.RigidModel(block, eta=None if damped else 1.0),

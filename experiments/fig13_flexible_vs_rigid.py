@@ -19,14 +19,13 @@ ap.add_argument("--n-elements", type=int, default=10)
 ap.add_argument("--out", default="out/figures")
 args = ap.parse_args()
 block = jr.Block.from_size(50.0, 5.0)
-p, tan_a = float(block.p), float(block.tan_alpha)
 models = {
     "RM": jr.RigidModel(block),
     "quasi-rigid SM": jr.SpringModel(block),
     "flexible SM": jr.SpringModel(block, jr.Column.concrete(), n_elements=args.n_elements),
 }
 for w_ratio, a_ratio in ((3.0, 2.6), (6.0, 5.85)):
-    pulse = jr.RickerPulse(a_ratio * jr.G * tan_a, w_ratio * p)
+    pulse = jr.RickerPulse(*jr.pulse_of_ratios(block, a_ratio, w_ratio))
     ts = np.linspace(float(pulse.t_start), float(pulse.t_end) + 10.0, 3001)
     sols = {}
     for name, m in models.items():

@@ -59,9 +59,10 @@ __all__ += [
 
 from .spring import (DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, Bilinear, Column, GeneralizedAlpha, SpringIntegrator,
                      SpringModel, SpringSystem, Tanh, cbar_eq17, first_period_eq21, pushover_eq9)
+from .scene import pulse_of_ratios, ratios_of_pulse
 from .io import el_centro, read_at2, read_record, read_scenes, read_two_column
 
-__all__ += ["el_centro", "read_at2", "read_record", "read_two_column", "read_scenes"]
+__all__ += ["pulse_of_ratios", "ratios_of_pulse", "el_centro", "read_at2", "read_record", "read_two_column", "read_scenes"]
 
 from .analyses import (CalibrationResult, RecordSpectrum, Spectrum, calibrate_cbar, energy_ratio, energy_ratio_grid, fit_power_law,
                        overturning_spectrum, record_overturning_scale, refine_boundaries, rm_target, run_batch, run_scenes)

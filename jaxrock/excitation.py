@@ -319,16 +319,3 @@ class Record(AbstractExcitation):
         frac = jnp.clip((level - v_prev) / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
         tau = jnp.where(rise > 0, t_prev + frac * (ts[k] - t_prev), ts[k])
         return jnp.where(now, t, jnp.where(found, tau, jnp.inf))
-
-
-PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}  # the pulse kinds by name
-
-
-def pulse_class(pulse) -> type:
-    """The pulse class named `pulse` (`PULSES`), or `pulse` itself when it is a class."""
-    if isinstance(pulse, str):
-        if pulse not in PULSES:
-            raise JaxrockInputError(f"pulse = {pulse!r}; valid: {sorted(PULSES)}")
-        return PULSES[pulse]
-    return pulse
-

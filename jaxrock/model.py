@@ -26,6 +26,7 @@ from ._validate import JaxrockInputError, Limit, check_one_scene, check_range, i
 from .excitation import AbstractExcitation
 from .geometry import Block
 from .results import Save, Solution, Status
+from .scene import CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA
 
 
 AUTODIFF_MODES = ("reverse", "forward")
@@ -289,7 +290,7 @@ def guard_scene(model: AbstractModel, excitation: AbstractExcitation):
 # the values an invalid lane runs instead of its own, by leaf name, so that NaN or negative sizes
 # never reach a loop (they ran it to its iteration bound).
 _NEUTRAL = {"h": 5.0, "b": 1.0, "b_base": 1.0, "eta": 0.9, "threshold": 1.0, "cbar": 0.05, "smoothing": 1e-4,
-            "zeta": 0.01, "E": 3e10, "rho": 2500.0, "A": 2.0, "I": 2.0 / 3.0, "a_p": 1.0, "omega_p": 6.0,
+            "zeta": CONCRETE_ZETA, "E": CONCRETE_E, "rho": CONCRETE_RHO, "A": 2.0, "I": 2.0 / 3.0, "a_p": 1.0, "omega_p": 6.0,
             "acc": 0.0, "dt": 0.01, "scale": 0.0}
 
 

@@ -10,7 +10,7 @@ import pytest
 import jaxrock as jr
 from jaxrock import JaxrockInputError
 from jaxrock.io.scenes_file import read_scenes, scene_model
-from jaxrock.excitation import PULSES
+from jaxrock.scene import PULSES
 
 ROWS = """id,height,tan_alpha,width,tan_alpha_base,model,pulse,a_p,accel_ratio,omega_p,omega_ratio,scale,eta,cbar,E,rho,zeta
 a,10,0.2,,,rigid,symmetric,,3,,2,,,,,,

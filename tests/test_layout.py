@@ -15,7 +15,7 @@ LAYERS = [
     ("analyses", ("analyses",)),
     ("input/output", ("io",)),
     ("models", ("rigid", "spring")),
-    ("protocol", ("model", "bookkeeping")),
+    ("protocol", ("model", "bookkeeping", "scene")),
     ("values", ("geometry", "excitation", "results")),
     ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "__init__")),
 ]

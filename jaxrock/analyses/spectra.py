@@ -21,12 +21,12 @@ from tqdm.auto import tqdm
 
 from .. import interrupt
 from .._validate import JaxrockInputError, check_grid
-from ..excitation import Record, pulse_class
-from ..geometry import G
+from ..excitation import Record
 from ..io import provenance
 from ..io.files import exclusive, write_atomically
 from ..model import AbstractIntegrator, AbstractModel
 from ..results import STATUS_NAMES
+from ..scene import AXES, pulse_class, pulse_of_ratios
 from .engine import batch_limit, make_stepper, run_batch
 
 
@@ -99,8 +99,7 @@ class Spectrum(eqx.Module):
                 "overturn_boundary": (("omega_ratio",), self.overturn_boundary, {"long_name": "least a_p/(g tan alpha) that overturns", "units": "1"}),
             },
             coords={
-                "omega_ratio": ("omega_ratio", self.omega_ratio, {"long_name": "omega_p/p", "units": "1"}),
-                "accel_ratio": ("accel_ratio", self.accel_ratio, {"long_name": "a_p/(g tan alpha)", "units": "1"}),
+                **{k: (k, getattr(self, k), {"long_name": AXES[k], "units": "1"}) for k in ("omega_ratio", "accel_ratio")},
             },
             attrs={**{k: (str(v) if not isinstance(v, (int, float, str)) else v) for k, v in self.attrs.items()},
                    "refined": int(self.uplift_line is not None)},
@@ -173,10 +172,8 @@ def overturning_spectrum(
 def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_checkpoint, refine, pulse) -> Spectrum:
     """`overturning_spectrum` on checked arguments, its checkpoint (if any) held."""
     block = model.block
-    p, tan_a = float(block.p_r), float(jnp.tan(block.alpha_r))
     W, A = np.meshgrid(wr, ar)
-    a_p = (A * G * tan_a).ravel()
-    w_p = (W * p).ravel()
+    a_p, w_p = (np.asarray(x).ravel() for x in pulse_of_ratios(block, A, W))
     n = a_p.size
     fields = ("max_theta", "overturned", "uplifted", "status")
     out = {k: np.zeros(n, dtype=float if k == "max_theta" else (np.int32 if k == "status" else bool)) for k in fields}
@@ -211,9 +208,9 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
         "model": type(model).__name__,
         "pulse": cls.__name__,
         "threshold": float(model.threshold),
-        "tan_alpha": tan_a,
+        "tan_alpha": float(jnp.tan(block.alpha_r)),
         "alpha": float(block.alpha_r),
-        "p": p,
+        "p": float(block.p_r),
         "height": float(block.height),
         "width": float(block.width),
         **provenance.file_attrs(model, integrator),
@@ -252,8 +249,6 @@ def refine_boundaries(
     least a_p within the bracket, not below it.
     """
     cls = pulse_class(pulse)
-    block = model.block
-    p, tan_a = float(block.p_r), float(jnp.tan(block.alpha_r))
     ar, wr = spectrum.accel_ratio, spectrum.omega_ratio
     lines = []
     for mask, flag in ((spectrum.uplifted, "uplifted"), (spectrum.overturned, "overturned")):
@@ -267,7 +262,7 @@ def refine_boundaries(
             for _ in range(int(iterations)):
                 interrupt.stop_point()
                 mid = np.where(todo, 0.5 * (lo + hi), ar[0])
-                exc = jax.vmap(cls)(jnp.asarray(mid * G * tan_a), jnp.asarray(wr * p))
+                exc = jax.vmap(cls)(*(jnp.asarray(x) for x in pulse_of_ratios(model.block, mid, wr)))
                 yes = np.asarray(getattr(run_batch(model, exc, integrator), flag))
                 hi = np.where(todo & yes, mid, hi)
                 lo = np.where(todo & ~yes, mid, lo)

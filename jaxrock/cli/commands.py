@@ -15,8 +15,13 @@ import typer
 
 from .guards import (CELL_SECONDS, EXIT_INTERRUPTED, EXIT_UNTRUSTED, RECORD_RUN_SECONDS, _estimate, _exit_if_untrusted, _guarded,
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts)
+from ..io.scenes_file import MODEL_PARAMETERS, RESULT_COLUMNS
+from ..spring.base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING
+from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, PULSES, RECORD_ALIASES, UNDAMPED, model_kinds, parameter_help
 from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model, even_batch,
                       parse_values, solution_summary, spectrum_summary)
+
+UNDAMPED_HELP = "no energy loss: " + ", ".join(f"{k} = {v:g}" for k, v in UNDAMPED.items()) + " (whichever the model takes)"
 
 app = typer.Typer(
     cls=_OneLineErrors,
@@ -32,11 +37,11 @@ app = typer.Typer(
 @app.command()
 @_guarded
 def spectrum(
-    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid (RM), spring (quasi-rigid SM with added masses), spring-flexible (SM, concrete column)"),
+    model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
     height: float = typer.Option(10.0, help="full height 2h [m]"),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h, in [tanα, 1)"),
-    pulse: PulseKind = typer.Option(PulseKind.symmetric, help="Ricker pulse shape"),
+    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="Ricker pulse shape"),
     omega_min: float = typer.Option(1.0, help="smallest ω_p/p"),
     omega_max: float = typer.Option(15.0, help="largest ω_p/p"),
     n_omega: int = typer.Option(48, help="number of ω_p/p values"),
@@ -45,7 +50,7 @@ def spectrum(
     n_accel: int = typer.Option(48, help="number of a_p/(g tanα) values"),
     out: str = typer.Option("out/spectrum", help="output stem: writes <out>.nc (netCDF) and <out>.png; a folder (or a path "
                             "ending in /) means <out>/spectrum.nc and .png"),
-    undamped: bool = typer.Option(False, "--undamped", help="no energy loss: η = 1 (rigid) or c̄ = 0 (spring)"),
+    undamped: bool = typer.Option(False, "--undamped", help=UNDAMPED_HELP),
     checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in the folder <out>.checkpoint; a rerun resumes"),
     batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into equal batches"),
     refine: int = typer.Option(10, min=0, max=40, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
@@ -117,25 +122,25 @@ def simulate(
     height: float = typer.Option(10.0, help="full height 2h [m]"),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h"),
-    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid, spring (quasi-rigid SM), spring-flexible"),
-    pulse: PulseKind = typer.Option(PulseKind.symmetric, help="Ricker pulse shape"),
+    model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
+    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="Ricker pulse shape"),
     a_p: Optional[float] = typer.Option(None, "--a-p", help="pulse amplitude [m/s²] (default: --accel-ratio 4)"),
     accel_ratio: Optional[float] = typer.Option(None, help="pulse amplitude as a_p/(g tanα) (default 4)"),
     omega_p: Optional[float] = typer.Option(None, help="pulse frequency [rad/s] (default 2π)"),
     omega_ratio: Optional[float] = typer.Option(None, help="pulse frequency as ω_p/p"),
-    record: Optional[str] = typer.Option(None, help="a record file (.AT2 or two-column) or 'elcentro', instead of a pulse"),
+    record: Optional[str] = typer.Option(None, help=f"a record file (.AT2 or two-column) or '{RECORD_ALIASES[0]}', instead of a pulse"),
     scale: float = typer.Option(1.0, help="factor on the record"),
     units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
                                  "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
-    undamped: bool = typer.Option(False, "--undamped", help="η = 1 (rigid) or c̄ = 0 (spring)"),
-    eta: Optional[float] = typer.Option(None, help="rigid: impact velocity ratio (default 1 − 1.5 sin²α)"),
-    cbar: Optional[float] = typer.Option(None, help="spring: damper c̄ (default eq. 17)"),
-    E: Optional[float] = typer.Option(None, "--E", help="spring-flexible: Young's modulus [Pa] (default 30e9)"),
-    rho: Optional[float] = typer.Option(None, help="spring-flexible: density [kg/m³] (default 2500)"),
-    zeta: Optional[float] = typer.Option(None, help="spring-flexible: column damping ratio (default 0.01)"),
-    backbone: Optional[BackboneKind] = typer.Option(None, help="spring: base-spring backbone (default tanh; bilinear with "
+    undamped: bool = typer.Option(False, "--undamped", help=UNDAMPED_HELP),
+    eta: Optional[float] = typer.Option(None, help=parameter_help("eta")),
+    cbar: Optional[float] = typer.Option(None, help=parameter_help("cbar")),
+    E: Optional[float] = typer.Option(None, "--E", help=parameter_help("E")),
+    rho: Optional[float] = typer.Option(None, help=parameter_help("rho")),
+    zeta: Optional[float] = typer.Option(None, help=parameter_help("zeta")),
+    backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {DEFAULT_BACKBONE}; bilinear with "
                                                     "--smoothing 1e-5 is within 1e-3 of the sharp limit, README)"),
-    smoothing: Optional[float] = typer.Option(None, help="spring: pre-yield rotation θs/α′ in (0, 1) (default 1e-4)"),
+    smoothing: Optional[float] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1) (default {DEFAULT_SMOOTHING:g})"),
     tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
     plot: Optional[Path] = typer.Option(None, help="write a time-history plot (PNG) here"),
     t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
@@ -192,7 +197,11 @@ def simulate(
 # ----------------------------------------------------------------------------------------------
 # batch
 # ----------------------------------------------------------------------------------------------
-@app.command()
+@app.command(help=(
+    "Run a CSV of scenes (vmapped, grouped by structure) and write a results CSV.\n\n"
+    f"Columns: height, tan_alpha | width, [tan_alpha_base], [model: {' | '.join(model_kinds())}], "
+    f"[pulse: {' | '.join(PULSES)} | {RECORD_ALIASES[0]} | FILE], a_p | accel_ratio, omega_p | omega_ratio, [scale], "
+    f"{', '.join(f'[{k}]' for k in MODEL_PARAMETERS)}. Results: the inputs plus {', '.join(RESULT_COLUMNS)}."))
 @_guarded
 def batch(
     scenes: Path = typer.Argument(..., help="scenes CSV (one scene per row; see `jaxrock.io.scenes_file`)"),
@@ -201,13 +210,6 @@ def batch(
     chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
-    """Run a CSV of scenes (vmapped, grouped by structure) and write a results CSV.
-
-    Columns: height, tan_alpha | width, [tan_alpha_base], [model: rigid | spring | spring-flexible],
-    [pulse: symmetric | antisymmetric | elcentro | FILE], a_p | accel_ratio, omega_p | omega_ratio,
-    [scale], [eta], [cbar], [E], [rho], [zeta]. Results: the inputs plus max_theta, overturned,
-    t_overturn, uplifted, t_uplift, n_impacts, status.
-    """
     from .._validate import check_writable
     from ..analyses.scenes import run_scenes
     from ..io.results_file import count_results, results_path_for
@@ -236,8 +238,8 @@ def batch(
 @app.command("record-spectrum")
 @_guarded
 def record_spectrum(
-    record: str = typer.Option("elcentro", help="record file (.AT2 or two-column text), or 'elcentro' (packaged El Centro 1940 NS)"),
-    model: ModelKind = typer.Option(ModelKind.rigid, help="rigid, spring, spring-flexible"),
+    record: str = typer.Option(RECORD_ALIASES[0], help=f"record file (.AT2 or two-column text), or '{RECORD_ALIASES[0]}' (packaged El Centro 1940 NS)"),
+    model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′"),
     heights: str = typer.Option("1,2,3,5,7,10,15,20", help="body heights 2h [m]: '1,2,5' or 'a:b:n'"),

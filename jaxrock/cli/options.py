@@ -10,23 +10,19 @@ from typing import Optional
 
 import numpy as np
 
+from ..scene import PULSES, model_kinds
+from ..spring.base_spring import BACKBONES
+
 MAX_LIST = 100_000  # values of a list option ('a:b:n')
 
 
-class ModelKind(str, Enum):
-    rigid = "rigid"
-    spring = "spring"
-    spring_flexible = "spring-flexible"
+# the vocabulary's kinds (`jaxrock.scene`) and the backbones as command-line choices; a member's
+# name is its value with '-' as '_' (ModelKind.spring_flexible)
+ModelKind = Enum("ModelKind", {k.replace("-", "_"): k for k in model_kinds()}, type=str)
+PulseKind = Enum("PulseKind", {k: k for k in PULSES}, type=str)
 
 
-class BackboneKind(str, Enum):
-    tanh = "tanh"
-    bilinear = "bilinear"
-
-
-class PulseKind(str, Enum):
-    symmetric = "symmetric"
-    antisymmetric = "antisymmetric"
+BackboneKind = Enum("BackboneKind", {k: k for k in BACKBONES}, type=str)
 
 
 def _check_count(name: str, n: int):
@@ -75,36 +71,30 @@ def parse_values(name: str, text: str) -> np.ndarray:
     return np.asarray(vals, dtype=float)
 
 
-def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alpha_base=None, *, undamped=False,
-                eta=None, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None):
-    """The model of a CLI scene: the flags are checked here, the model is built by
-    `batch.scene_model` (the same as a batch row)."""
+def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alpha_base=None, *, undamped=False, **parameters):
+    """The model of a CLI scene: every parameter flag given (None: not given) must be one the model
+    kind takes (the registry says which, `jaxrock.scene.takes`); `undamped` sets each damping
+    parameter of the kind to its undamped value (`jaxrock.scene.UNDAMPED`). Built by
+    `scene_model`, as a scenes-file row is."""
     from .._validate import JaxrockInputError
-    from ..io.scenes_file import scene_model
     from ..geometry import Block
+    from ..io.scenes_file import scene_model
+    from ..scene import UNDAMPED, takes
 
-    kind = ModelKind(model)
+    kind = ModelKind(model).value
     block = Block.from_slenderness(height, tan_alpha, tan_alpha_base)
-    if kind is not ModelKind.spring_flexible:
-        for name, v in (("--E", E), ("--rho", rho), ("--zeta", zeta)):
-            if v is not None:
-                raise JaxrockInputError(f"{name} applies to --model spring-flexible only (the column's material)")
-    if kind is ModelKind.rigid:
-        for name, v in (("--backbone", backbone), ("--smoothing", smoothing)):
-            if v is not None:
-                raise JaxrockInputError(f"{name} applies to the spring models only (the base spring)")
-        if cbar is not None:
-            raise JaxrockInputError("--cbar applies to the spring models only (rigid: --eta or --undamped)")
-        if undamped and eta is not None:
-            raise JaxrockInputError("give --undamped or --eta, not both")
-        return scene_model("rigid", block, eta=1.0 if undamped else eta)
-    if eta is not None:
-        raise JaxrockInputError("--eta applies to the rigid model only (spring: --cbar or --undamped)")
-    if undamped and cbar is not None:
-        raise JaxrockInputError("give --undamped or --cbar, not both")
-    backbone = None if backbone is None else BackboneKind(backbone).value
-    return scene_model(kind.value, block, cbar=0.0 if undamped else cbar, E=E, rho=rho, zeta=zeta, backbone=backbone,
-                       smoothing=smoothing)
+    given = {k: v for k, v in parameters.items() if v is not None}
+    for name in given:
+        if kind not in takes(name):
+            raise JaxrockInputError(f"--{name} applies to --model {' / '.join(takes(name))} only, not {kind}")
+    if undamped:
+        for name in (k for k in UNDAMPED if kind in takes(k)):
+            if name in given:
+                raise JaxrockInputError(f"give --undamped or --{name}, not both")
+            given[name] = UNDAMPED[name]
+    if "backbone" in given:
+        given["backbone"] = BackboneKind(given["backbone"]).value
+    return scene_model(kind, block, **given)
 
 
 def _integrator(model: ModelKind, tol: Optional[float]):
@@ -162,14 +152,14 @@ def spectrum_summary(spec, seconds: float) -> str:
 
 def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio, units=None):
     from .._validate import JaxrockInputError, check_range
-    from ..excitation import PULSES
+    from ..scene import is_builtin_record, pulse_of_ratios, ratios_of_pulse
 
     if record is not None:
         for name, v in (("--a-p", a_p), ("--accel-ratio", accel_ratio), ("--omega-p", omega_p), ("--omega-ratio", omega_ratio)):
             if v is not None:
                 raise JaxrockInputError(f"{name} applies to Ricker pulses, not to --record")
         check_range("--scale", scale, 0.0, math.inf, hi_open=True)
-        if record.lower() in ("elcentro", "el-centro", "el_centro"):
+        if is_builtin_record(record):
             from ..io.records import el_centro
 
             if units is not None:
@@ -191,16 +181,16 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
     if a_p is None:
         accel_ratio = 4.0 if accel_ratio is None else accel_ratio
         check_range("--accel-ratio", accel_ratio)
-        a_p = accel_ratio * float(block.uplift_acceleration)
+        a_p = float(pulse_of_ratios(block, accel_ratio, 1.0)[0])
     if omega_p is None:
         if omega_ratio is None:
             omega_p = 2 * math.pi
         else:
             check_range("--omega-ratio", omega_ratio, 0.0, math.inf, lo_open=True, hi_open=True)
-            omega_p = omega_ratio * float(block.p_r)
+            omega_p = float(pulse_of_ratios(block, 1.0, omega_ratio)[1])
     exc = PULSES[pulse](a_p, omega_p)
-    desc = (f"{pulse} Ricker pulse a_p = {a_p:.4g} m/s² ({a_p / float(block.uplift_acceleration):.4g} g tanα), "
-            f"ω_p = {omega_p:.4g} rad/s ({omega_p / float(block.p_r):.4g} p)")
+    a_r, w_r = (float(x) for x in ratios_of_pulse(block, a_p, omega_p))
+    desc = f"{pulse} Ricker pulse a_p = {a_p:.4g} m/s² ({a_r:.4g} g tanα), ω_p = {omega_p:.4g} rad/s ({w_r:.4g} p)"
     return exc, desc
 
 

@@ -8,24 +8,7 @@ A CSV file with a header line. Column names are case-insensitive; empty cells me
 blank lines and lines whose first cell starts with `#` are skipped. Rows are numbered from 1 (the
 first scene after the header). Columns:
 
-| column | unit | meaning | valid values / default |
-| --- | --- | --- | --- |
-| `height` | m | full height 2h of the column | > 0, required |
-| `tan_alpha` | – | slenderness tanα = b/h | (0, 1); give it or `width` |
-| `width` | m | full width 2b (instead of `tan_alpha`) | > 0, width/height < 1 |
-| `tan_alpha_base` | – | extended rigid base tanα′ = b′/h (paper section 5) | [tanα, 1); default: no base |
-| `model` | – | `rigid` (RM), `spring` (quasi-rigid SM with added masses), `spring-flexible` (SM, elastic column), or a kind registered with `jaxrock.register_model_kind` | default `rigid` |
-| `pulse` | – | `symmetric` / `antisymmetric` Ricker pulse, `elcentro` (the packaged El Centro 1940 NS), or a record file path (`.AT2` or two-column text; relative to the scenes file, else to the working directory) | default `symmetric` |
-| `a_p` | m/s² | pulse amplitude (any sign, ≠ 0) | pulses: give it or `accel_ratio` |
-| `accel_ratio` | – | a_p/(g tanα′) | ≠ 0 |
-| `omega_p` | rad/s | pulse frequency | > 0; pulses: give it or `omega_ratio` |
-| `omega_ratio` | – | ω_p/p′ | > 0 |
-| `scale` | – | factor on a record | ≥ 0, default 1 (records only) |
-| `eta` | – | rigid impact velocity ratio (1: undamped) | [0, 1], default 1 − 1.5 sin²α′ (rigid only) |
-| `cbar` | – | spring-model damper c̄ (0: undamped) | ≥ 0, default eq. 17 (spring models only) |
-| `E` | Pa | Young's modulus of the column | > 0, default 30e9 (`spring-flexible` only) |
-| `rho` | kg/m³ | density of the column | > 0, default 2500 (`spring-flexible` only) |
-| `zeta` | – | column damping ratio, first fixed-base mode | ≥ 0, default 0.01 (`spring-flexible` only) |
+<the scene's parameters: `jaxrock.scene.parameter_table()`>
 
 Label columns are copied to the results unchanged: `id`, `name`, `label`, `group`, `note`,
 `notes`, `comment`, or any name starting with `x_`. Any other column is an error that names the
@@ -71,47 +54,21 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
-from ..excitation import PULSES, Record
+from ..excitation import Record
 from ..geometry import TAN_ALPHA_MIN, Block
 from ..model import MODEL_KINDS
+from ..scene import (CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA, DEFAULT_MODEL, DEFAULT_PULSE, PULSES, RECORD_ALIASES, model_kinds,
+                     is_builtin_record, parameter_table, parameters, pulse_of_ratios, takes)
 from .tables import csv_text
 
-BUILTIN_RECORDS = ("elcentro",)
-INPUT_COLUMNS = (
-    "height",
-    "tan_alpha",
-    "width",
-    "tan_alpha_base",
-    "model",
-    "pulse",
-    "a_p",
-    "accel_ratio",
-    "omega_p",
-    "omega_ratio",
-    "scale",
-    "eta",
-    "cbar",
-    "e",
-    "rho",
-    "zeta",
-)
+__doc__ = __doc__.replace("<the scene's parameters: `jaxrock.scene.parameter_table()`>", parameter_table())
+INPUT_COLUMNS = tuple(p.name.lower() for p in parameters())  # lower-cased, as the header's names are read
 # Columns copied to the results unchanged (labels); any other unknown column is an error naming
 # the closest known one (a typo such as `modle` ran the rigid model in silence).
 PASS_THROUGH = ("id", "name", "label", "group", "note", "notes", "comment")
 PASS_THROUGH_PREFIX = "x_"
 RESULT_COLUMNS = ("max_theta", "overturned", "t_overturn", "uplifted", "t_uplift", "n_impacts", "status")
 MODEL_PARAMETERS = ("eta", "cbar", "E", "rho", "zeta")  # model parameter columns (lower-cased in files)
-
-
-def models() -> tuple[str, ...]:
-    """The model kinds a scenes file may name (`jaxrock.model.MODEL_KINDS`: the built-in rigid,
-    spring and spring-flexible, and any kind registered since)."""
-    return tuple(MODEL_KINDS)
-
-
-def _takes(parameter: str) -> tuple[str, ...]:
-    """The model kinds that take a parameter column."""
-    return tuple(k.name for k in MODEL_KINDS.values() if parameter in k.parameters)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -179,8 +136,7 @@ class _Table:
 def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
     from .records import el_centro, read_record
 
-    key = text.lower()
-    if key in ("elcentro", "el-centro", "el_centro"):
+    if is_builtin_record(text):
         if "elcentro" not in cache:
             cache["elcentro"] = el_centro()
         return cache["elcentro"]
@@ -188,7 +144,7 @@ def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
     path = next((p for p in candidates if p.is_file()), None)
     if path is None:
         fail(
-            f"{text!r} is neither 'symmetric', 'antisymmetric', 'elcentro' nor a record file "
+            f"{text!r} is neither a pulse ({', '.join(PULSES)}), '{RECORD_ALIASES[0]}' nor a record file "
             f"(looked in {base} and the working directory)"
         )
     path = path.resolve()
@@ -201,11 +157,11 @@ def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
 
 
 def scene_model(kind: str, block: Block, **parameters):
-    """The model of one scene of model kind `kind` (`models()`), built by its registered builder
+    """The model of one scene of model kind `kind` (`model_kinds()`), built by its registered builder
     (`jaxrock.model.ModelKind`) from `block` and the given `parameters` (None: the default):
     shared by the batch rows and the CLI. Refuses a parameter the kind does not take."""
     if kind not in MODEL_KINDS:
-        raise JaxrockInputError(f"model = {kind!r}; valid: {', '.join(models())}")
+        raise JaxrockInputError(f"model = {kind!r}; valid: {', '.join(model_kinds())}")
     entry = MODEL_KINDS[kind]
     given = {k: v for k, v in parameters.items() if v is not None}
     extra = sorted(set(given) - set(entry.parameters))
@@ -258,10 +214,10 @@ class Scenes:
 
 def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     everyone = np.ones(t.n, bool)
-    kind = np.char.lower(t.text("model", "rigid").astype(str))
-    t.fail(~np.isin(kind, models()), "model", lambda i: f"{t.cells['model'][i]!r}; valid: {', '.join(models())}")
+    kind = np.char.lower(t.text("model", DEFAULT_MODEL).astype(str))
+    t.fail(~np.isin(kind, model_kinds()), "model", lambda i: f"{t.cells['model'][i]!r}; valid: {', '.join(model_kinds())}")
     for name in MODEL_PARAMETERS:
-        col, kinds = name.lower(), _takes(name)
+        col, kinds = name.lower(), takes(name)
         t.fail(t.has(col) & ~np.isin(kind, kinds), col, lambda i: f"applies only to model {' / '.join(kinds)}, not {kind[i]}")
 
     height = t.num("height", 0.0, math.inf, lo_open=True, hi_open=True)
@@ -285,20 +241,20 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     E = t.num("e", 0.0, math.inf, lo_open=True, hi_open=True)
     rho = t.num("rho", 0.0, math.inf, lo_open=True, hi_open=True)
     zeta = t.num("zeta", 0.0, math.inf, hi_open=True)
-    from ..spring import DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA, Column, cbar_eq17
+    from ..spring import Column, cbar_eq17
 
     params = {
         "height": height, "tan_alpha": tan_a, "tan_alpha_base": tan_b,
         "eta": np.where(np.isnan(eta), np.asarray(blocks.eta_r), eta),
         "cbar": np.where(np.isnan(cbar), np.asarray(cbar_eq17(blocks.alpha_r)), cbar),
-        "E": np.where(np.isnan(E), DEFAULT_E, E), "rho": np.where(np.isnan(rho), DEFAULT_RHO, rho),
-        "zeta": np.where(np.isnan(zeta), DEFAULT_ZETA, zeta),
+        "E": np.where(np.isnan(E), CONCRETE_E, E), "rho": np.where(np.isnan(rho), CONCRETE_RHO, rho),
+        "zeta": np.where(np.isnan(zeta), CONCRETE_ZETA, zeta),
     }
-    flexible = np.isin(kind, _takes("E"))  # rows whose column's material is checked
+    flexible = np.isin(kind, takes("E"))  # rows whose column's material is checked
     columns = jax.vmap(Column)(jnp.asarray(params["E"]), jnp.asarray(params["rho"]))
     t.fail(flexible & _invalid_lanes(columns), None, lambda i: _refusal(lambda: Column(params["E"][i], params["rho"][i])))
 
-    pulse = t.text("pulse", "symmetric").astype(str)
+    pulse = t.text("pulse", DEFAULT_PULSE).astype(str)
     exc = np.char.lower(pulse).astype(object)  # room for "record:<n>"
     is_pulse = np.isin(exc, list(PULSES))
     t.fail(is_pulse & t.has("scale"), "scale", "applies only to records, not to a Ricker pulse")
@@ -311,10 +267,11 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
         exc[rows] = f"record:{rec.n}"
     by_a = t.one_of("a_p", "accel_ratio", "pulse amplitude a_p [m/s^2], or a_p/(g tan alpha)", is_pulse)
     by_w = t.one_of("omega_p", "omega_ratio", "pulse frequency omega_p [rad/s], or omega_p/p", is_pulse)
-    a_p = np.where(by_a, t.num("a_p", nonzero=True, rows=is_pulse),
-                   t.num("accel_ratio", nonzero=True, rows=is_pulse) * np.asarray(blocks.uplift_acceleration))
-    w_p = np.where(by_w, t.num("omega_p", 0.0, math.inf, lo_open=True, hi_open=True, rows=is_pulse),
-                   t.num("omega_ratio", 0.0, math.inf, lo_open=True, hi_open=True, rows=is_pulse) * np.asarray(blocks.p_r))
+    a_p, a_r = t.num("a_p", nonzero=True, rows=is_pulse), t.num("accel_ratio", nonzero=True, rows=is_pulse)
+    w_p = t.num("omega_p", 0.0, math.inf, lo_open=True, hi_open=True, rows=is_pulse)
+    w_r = t.num("omega_ratio", 0.0, math.inf, lo_open=True, hi_open=True, rows=is_pulse)
+    a_of_ratio, w_of_ratio = pulse_of_ratios(blocks, a_r, w_r)
+    a_p, w_p = np.where(by_a, a_p, np.asarray(a_of_ratio)), np.where(by_w, w_p, np.asarray(w_of_ratio))
     for col in ("a_p", "accel_ratio", "omega_p", "omega_ratio"):
         t.fail(~is_pulse & t.has(col), col, "applies only to Ricker pulses (pulse = symmetric / antisymmetric), not to a record")
     scale = t.num("scale", 0.0, math.inf, hi_open=True, rows=~is_pulse)
@@ -384,4 +341,4 @@ def read_scenes(path) -> Scenes:
     return Scenes(header, np.asarray(rows), values, groups, params, records)
 
 
-__all__ = ["read_scenes", "Scenes", "models", "scene_model", "INPUT_COLUMNS", "RESULT_COLUMNS"]
+__all__ = ["read_scenes", "Scenes", "scene_model", "INPUT_COLUMNS", "RESULT_COLUMNS"]

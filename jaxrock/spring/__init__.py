@@ -59,7 +59,7 @@ from .base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, 
 from .column import Column, cbar_eq17, first_period_eq21, pushover_eq9
 from .diffrax_integrator import DiffraxSpringStepper, SpringIntegrator
 from .generalized_alpha import GeneralizedAlpha, GeneralizedAlphaStepper
-from .model import DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA, SpringModel
+from .model import SpringModel
 from .system import HISTORY_FIELDS, SpringSystem, assemble
 
 __all__ = [
@@ -82,7 +82,4 @@ __all__ = [
     "HISTORY_FIELDS",
     "DEFAULT_SMOOTHING",
     "DEFAULT_BACKBONE",
-    "DEFAULT_E",
-    "DEFAULT_RHO",
-    "DEFAULT_ZETA",
 ]

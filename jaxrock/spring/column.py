@@ -12,6 +12,7 @@ from jaxtyping import Array, Float
 
 from .._validate import JaxrockInputError, Limit, check_limits
 from ..geometry import Block
+from ..scene import CONCRETE_E, CONCRETE_RHO
 
 
 def cbar_eq17(alpha):
@@ -42,7 +43,7 @@ class Column(eqx.Module):
     A: Float[Array, ""] | None = None
     I: Float[Array, ""] | None = None
 
-    def __init__(self, E, rho=2500.0, A=None, I=None):
+    def __init__(self, E, rho=CONCRETE_RHO, A=None, I=None):
         if (A is None) != (I is None):
             raise JaxrockInputError("give both the section area A and its second moment I, or neither")
         self.E = jnp.asarray(E, dtype=float)
@@ -60,11 +61,11 @@ class Column(eqx.Module):
 
     @classmethod
     def concrete(cls, A=None, I=None) -> "Column":
-        """E = 30 GPa, ρ = 2500 kg/m³ (paper sections 4–6)."""
-        return cls(30e9, 2500.0, A, I)
+        """Concrete: E = 30 GPa, ρ = 2500 kg/m³ (paper sections 4–6; `jaxrock.scene`)."""
+        return cls(CONCRETE_E, CONCRETE_RHO, A, I)
 
     @classmethod
-    def quasi_rigid(cls, rho=2500.0) -> "Column":
+    def quasi_rigid(cls, rho=CONCRETE_RHO) -> "Column":
         """E = 10¹⁴ Pa (paper section 3: 'quasi-rigid' FE column)."""
         return cls(1e14, rho)
 

@@ -19,6 +19,7 @@ from ..bookkeeping import Watch
 from ..excitation import AbstractExcitation
 from ..geometry import G, Block
 from ..model import AbstractModel, AbstractSpringIntegrator, register_model_kind
+from ..scene import CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA
 from . import beam
 from .base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, as_backbone
 from .column import Column, cbar_eq17, pushover_eq9
@@ -26,8 +27,6 @@ from .diffrax_integrator import SpringIntegrator
 from .generalized_alpha import GeneralizedAlpha
 from .system import ENERGY_FIELDS, HISTORY_FIELDS, SpringSystem, assemble
 
-DEFAULT_E, DEFAULT_RHO, DEFAULT_ZETA = 30e9, 2500.0, 0.01  # a scenes file's column: concrete (paper sections 4–6)
-QUASI_RIGID_RHO = 2500.0  # kg/m³: mass of the quasi-rigid scene (results do not depend on it)
 
 
 class SpringModel(AbstractModel):
@@ -70,7 +69,7 @@ class SpringModel(AbstractModel):
         cbar=None,
         backbone: AbstractBackbone | str = DEFAULT_BACKBONE,
         smoothing=DEFAULT_SMOOTHING,
-        zeta=0.01,
+        zeta=CONCRETE_ZETA,
         n_elements: int = 10,
         fixed_base: bool = False,
         threshold=1.0,
@@ -139,7 +138,7 @@ class SpringModel(AbstractModel):
     def mass(self):
         """Column mass m [kg] (per unit out-of-plane thickness for the default section)."""
         if self.column is None:
-            return QUASI_RIGID_RHO * 2 * self.block.b * 2 * self.block.h
+            return CONCRETE_RHO * 2 * self.block.b * 2 * self.block.h
         A, _ = self.column.section(self.block)
         return self.column.rho * A * 2 * self.block.h
 
@@ -281,8 +280,8 @@ def _quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -
 
 def _flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None) -> SpringModel:
     """A scenes file's flexible spring model: a concrete column unless E, ρ, ζ are given."""
-    column = Column(DEFAULT_E if E is None else E, DEFAULT_RHO if rho is None else rho)
-    return SpringModel(block, column, zeta=DEFAULT_ZETA if zeta is None else zeta, cbar=cbar,
+    column = Column(CONCRETE_E if E is None else E, CONCRETE_RHO if rho is None else rho)
+    return SpringModel(block, column, zeta=CONCRETE_ZETA if zeta is None else zeta, cbar=cbar,
                        backbone=DEFAULT_BACKBONE if backbone is None else backbone,
                        smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
 
