@@ -103,7 +103,7 @@ def run(scenes, flexible, backbone, smoothing, integrator, timed=False):
                 best = min(best, time.perf_counter() - t)
             per_scene += best
         theta[idx] = np.asarray(sol.max_theta)
-        status[idx] = np.asarray(sol.status._value)
+        status[idx] = np.asarray(jr.status_codes(sol.status))
     return theta, status, per_scene / scenes["ar"].size
 
 

@@ -134,7 +134,7 @@ def main() -> None:
     compile_vmap = max(t_first - t_def, 0.0)
     err_def = np.max(np.abs(np.asarray(s_def.max_theta) - ref_theta))
     rows.append((f"jaxrock jit(vmap(simulate)) (default: {DEFAULT_NAME})", t_def / ncell, compile_vmap, err_def,
-                 int(np.sum(np.asarray(s_def.status._value) != 0))))
+                 int(np.sum(np.asarray(jr.status_codes(s_def.status)) != 0))))
 
     # SciPy tuned to the same error
     sp_rows = []

@@ -70,7 +70,7 @@ def jax_grid(model, wr, ar, integrator, repeat=2):
 def jax_cells(model, a_p, w_p, integrator):
     f = jax.jit(jax.vmap(lambda a, w: jr.simulate(model, jr.RickerPulse(a, w), integrator=integrator)))
     sol = f(jnp.asarray(a_p), jnp.asarray(w_p))
-    return np.asarray(sol.max_theta), np.asarray(sol.status._value)
+    return np.asarray(sol.max_theta), np.asarray(jr.status_codes(sol.status))
 
 
 def label(integ):

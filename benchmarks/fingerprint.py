@@ -41,7 +41,7 @@ def fingerprint() -> dict[str, np.ndarray]:
         for f in ("max_theta", "t_uplift", "t_overturn", "n_impacts"):
             out[f"h_{name}.{f}"] = np.asarray(getattr(sol, f))
             out[f"s_{name}.{f}"] = np.asarray(getattr(summary, f))
-        out[f"h_{name}.status"], out[f"s_{name}.status"] = np.asarray(sol.status._value), np.asarray(summary.status._value)
+        out[f"h_{name}.status"], out[f"s_{name}.status"] = np.asarray(jr.status_codes(sol.status)), np.asarray(jr.status_codes(summary.status))
     pulse = lambda a: jr.RickerPulse(a_p=a, omega_p=6.0)
     out["grad_rm"] = np.asarray(jax.grad(lambda a: jr.simulate(jr.RigidModel(blk), pulse(a)).max_theta)(2.0))
     out["grad_sm"] = np.asarray(jax.grad(lambda a: jr.simulate(jr.SpringModel(blk), pulse(a)).max_theta)(2.0))

@@ -35,7 +35,7 @@ __all__ = [
     "JaxrockInputError",
 ]
 
-from .results import Save, Solution, Status, status_names
+from .results import SUMMARY, Output, Save, Solution, Status, status_codes, status_names
 from .model import (AbstractIntegrator, AbstractModel, AbstractSpringIntegrator, AbstractStepper, ModelKind, Schedule,
                     register_model_kind, simulate)
 from .rigid import EventIntegrator, RigidModel
@@ -45,6 +45,9 @@ __all__ += [
     "Solution",
     "Status",
     "status_names",
+    "status_codes",
+    "SUMMARY",
+    "Output",
     "AbstractIntegrator",
     "AbstractModel",
     "AbstractStepper",

@@ -19,7 +19,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-from .results import Solution, Status
+from .results import OUTPUTS, SUMMARY, Solution, Status
 
 
 def _hermite(s, a0, a1, w0, w1):
@@ -169,22 +169,30 @@ class Watch(eqx.Module):
             t_overturn=jnp.where(over, t_over, jnp.inf),
         )
 
-    def solution(self, record: Record, status: Status, *, n_impacts=None, ts=None, history=None, n_iterations=0) -> Solution:
-        """The run's `Solution`: max |θ|/α′ (the threshold once overturned, never beyond it); a
-        non-finite peak is `Status.solver_failed` with NaN."""
+    def solution(self, record: Record, status: Status, *, ts=None, history=None, n_iterations=0, **outputs) -> Solution:
+        """The run's `Solution`: the summary outputs (`jaxrock.results.SUMMARY`) from the record —
+        max |θ|/α′ (the threshold once overturned, never beyond it; a non-finite peak is
+        `Status.solver_failed` with NaN), overturned and uplifted with their times — and the
+        `outputs` an integrator computes itself (the rigid model's `n_impacts`); an output nobody
+        computes takes its `absent` value."""
         max_theta = jnp.where(record.overturned, self.threshold,
                               jnp.minimum(record.peak, self.threshold * self.alpha) / self.alpha)
         bad = ~jnp.isfinite(max_theta)
         status = Status.where(bad & (status == Status.ok), Status.solver_failed, status)
-        return Solution(
-            max_theta=jnp.where(bad, jnp.nan, max_theta),
-            overturned=record.overturned,
-            t_overturn=record.t_overturn,
-            uplifted=jnp.isfinite(record.t_uplift),
-            t_uplift=record.t_uplift,
-            n_impacts=jnp.zeros((), int) if n_impacts is None else n_impacts,
-            status=status,
-            ts=ts,
-            history=history,
-            n_iterations=n_iterations,
-        )
+        values = {
+            "max_theta": jnp.where(bad, jnp.nan, max_theta),
+            "overturned": record.overturned,
+            "t_overturn": record.t_overturn,
+            "uplifted": jnp.isfinite(record.t_uplift),
+            "t_uplift": record.t_uplift,
+            **outputs,
+        }
+        unknown = sorted(set(values) - set(OUTPUTS))
+        if unknown:
+            raise TypeError(f"{unknown}: not summary outputs (jaxrock.results.SUMMARY: {', '.join(OUTPUTS)})")
+        for o in SUMMARY:
+            if o.name not in values:
+                if o.absent is None:
+                    raise TypeError(f"the summary output {o.name!r} has no value and no absent value")
+                values[o.name] = jnp.asarray(o.absent, dtype=o.dtype)
+        return Solution(**values, status=status, ts=ts, history=history, n_iterations=n_iterations)

@@ -25,7 +25,7 @@ from jaxtyping import Array, Bool, PyTree
 from ._validate import JaxrockInputError, Limit, check_one_scene, check_range, is_concrete, within_limits
 from .excitation import AbstractExcitation
 from .geometry import Block
-from .results import Save, Solution, Status
+from .results import OUTPUTS, Save, Solution, Status
 from .scene import CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA
 
 
@@ -248,7 +248,7 @@ def simulate(
         raise JaxrockInputError(f"model must be a jaxrock model (RigidModel, SpringModel), got {type(model).__name__}")
     if not isinstance(excitation, AbstractExcitation):
         raise JaxrockInputError(
-            f"excitation must be a jaxrock excitation (RickerPulse, AntisymmetricRickerPulse, Record), got {type(excitation).__name__}"
+            f"excitation must be a jaxrock excitation (a pulse, a Record: jaxrock.AbstractExcitation), got {type(excitation).__name__}"
         )
     check_one_scene(scene_limits(model, excitation))
     if save is None and t1 is not None:
@@ -308,12 +308,11 @@ def _neutral(tree, ok):
 
 def flag_invalid(sol: Solution, ok) -> Solution:
     """`Status.invalid_input` and NaN numbers where `ok` is false (a parameter outside its
-    limits). Concrete input is refused at construction; under `jax.vmap`/`jax.jit` constructors
-    see tracers and cannot, so the run flags it instead (failure as a value)."""
-    nan = jnp.asarray(jnp.nan, dtype=sol.max_theta.dtype)
+    limits; each summary output's `Output.invalid`). Concrete input is refused at construction;
+    under `jax.vmap`/`jax.jit` constructors see tracers and cannot, so the run flags it instead
+    (failure as a value)."""
     return eqx.tree_at(
-        lambda s: (s.max_theta, s.overturned, s.uplifted, s.t_overturn, s.t_uplift, s.status),
+        lambda s: (*(getattr(s, name) for name in OUTPUTS), s.status),
         sol,
-        (jnp.where(ok, sol.max_theta, nan), sol.overturned & ok, sol.uplifted & ok, jnp.where(ok, sol.t_overturn, nan),
-         jnp.where(ok, sol.t_uplift, nan), Status.where(ok, sol.status, Status.invalid_input)),
+        (*(o.invalid(getattr(sol, name), ok) for name, o in OUTPUTS.items()), Status.where(ok, sol.status, Status.invalid_input)),
     )

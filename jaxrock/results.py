@@ -1,10 +1,17 @@
-"""What a run returns: a status enumeration (failure as a value) and the `Solution` pytree.
+"""What a run returns, declared once: the status enumeration (failure as a value), the summary
+outputs (`SUMMARY`) and the `Solution` pytree built from them.
 
-A `Solution` always carries the summary of a scene (max |θ|/α, overturned flag and time, uplift,
-impacts, status); a time history only when one was asked for with `Save`.
+Every summary output is one `Output` of `SUMMARY`: its name, a short label, its meaning, its units and
+its kind. `Solution`'s fields, `Spectrum`'s arrays, the netCDF variables (long_name, units), the
+batch results file's columns (`RESULT_COLUMNS`) and the command line's summaries are generated from
+it; a new output is a line here and the code that computes it (`jaxrock.bookkeeping.Watch.solution`,
+or an integrator passing it there).
 """
 
 from __future__ import annotations
+
+import types
+from typing import NamedTuple
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -26,9 +33,88 @@ class Status(eqx.Enumeration):
 STATUS_NAMES: tuple[str, ...] = tuple(Status._name_to_item)  # index = the item's integer value
 
 
+def status_codes(status: Status):
+    """The integer codes (index into `STATUS_NAMES`; 0 = ok) of (a batch of) status values: an
+    array (traced under `jit`/`vmap`)."""
+    return status._value
+
+
 def status_names(status: Status) -> np.ndarray:
     """Names of (a batch of) status values, e.g. for a CSV column."""
-    return np.asarray(STATUS_NAMES, dtype=object)[np.asarray(status._value)]
+    return np.asarray(STATUS_NAMES, dtype=object)[np.asarray(status_codes(status))]
+
+
+class Output(NamedTuple):
+    """One summary output of a run.
+
+    - `name`: the field of `Solution` and `Spectrum`, the netCDF variable and the CSV column;
+    - `label`: how the command line's summaries call it;
+    - `meaning` (the netCDF long_name) and `units` (CF: "1" for ratios, flags and counts);
+    - `kind`: "float", "bool" or "int";
+    - `absent`: its value from a model that does not compute it (None: every model does).
+    """
+
+    name: str
+    label: str
+    meaning: str
+    units: str
+    kind: str
+    absent: float | bool | int | None = None
+
+    @property
+    def dtype(self) -> type:
+        return {"float": np.float64, "bool": np.bool_, "int": np.int64}[self.kind]
+
+    @property
+    def annotation(self):
+        return {"float": Float, "bool": Bool, "int": Int}[self.kind][Array, ""]
+
+    def csv_value(self, x) -> float | int:
+        """The value a CSV cell holds (`jaxrock.io.tables.cell` writes it): floats exactly, flags 0/1."""
+        return float(x) if self.kind == "float" else int(x)
+
+    def line(self, x) -> str:
+        """One scene's value as the command line prints it ("max θ/α = 0.663037", "overturned: no")."""
+        if self.kind == "bool":
+            return f"{self.label}: {'yes' if bool(x) else 'no'}"
+        if self.kind == "int":
+            return f"{self.label}: {int(x)}"
+        if self.units == "s":
+            return f"{self.label}: {f't = {float(x):.4f} s' if np.isfinite(x) else 'never'}"
+        return f"{self.label} = {float(x):.6f}"
+
+    def invalid(self, x, ok):
+        """`x` where `ok`, else what an invalid scene reports (NaN, no, or the absent value)."""
+        if self.kind == "float":
+            return jnp.where(ok, x, jnp.asarray(jnp.nan, dtype=x.dtype))
+        if self.kind == "bool":
+            return x & ok
+        return jnp.where(ok, x, jnp.asarray(0 if self.absent is None else self.absent, dtype=x.dtype))
+
+
+SUMMARY: tuple[Output, ...] = (
+    Output("max_theta", "max θ/α", "max |theta|/alpha' over the whole response (alpha' the rocking slenderness: alpha without "
+           "a base): the exact peak; the threshold once overturned, never beyond it", "1", "float"),
+    Output("overturned", "overturned", "|theta| reached threshold*alpha'", "1", "bool"),
+    Output("t_overturn", "overturned at", "time of overturning (+inf: did not overturn)", "s", "float"),
+    Output("uplifted", "uplifted", "the body left its rest state (|theta| passed the uplift rotation)", "1", "bool"),
+    Output("t_uplift", "uplifted at", "first time |theta| passed the uplift rotation (+inf: never)", "s", "float"),
+    Output("n_impacts", "impacts", "impacts at theta = 0 (the rigid model's; 0 for spring models)", "1", "int", absent=0),
+)
+OUTPUTS = {o.name: o for o in SUMMARY}
+RESULT_COLUMNS: tuple[str, ...] = (*OUTPUTS, "status")  # a results row: the summary, then the status name
+
+
+def schema_module(name: str, base: type, doc: str, fields: dict, defaults: dict, module: str) -> type:
+    """A module class `name` (subclass of `base`) with the annotated `fields` (name → annotation,
+    in order) and `defaults`: how `Solution` and `Spectrum` take their fields from `SUMMARY`."""
+    namespace = {"__annotations__": fields, "__doc__": doc, "__module__": module, "__qualname__": name, **defaults}
+    return types.new_class(name, (base,), {}, lambda ns: ns.update(namespace))
+
+
+def summary_doc() -> str:
+    """The summary outputs as a list (`name` [units]: meaning), for docstrings."""
+    return "\n".join(f"- `{o.name}` [{o.units}]: {o.meaning}." for o in SUMMARY)
 
 
 class Save(eqx.Module):
@@ -51,29 +137,23 @@ class Save(eqx.Module):
         self.fields = tuple(fields)
 
 
-class Solution(eqx.Module):
-    """The result of one scene (or, under vmap, of a batch: every leaf gains leading axes).
-
-    - `max_theta`: max |θ|/α_r over the whole response (exact peak; = threshold if it overturned).
-    - `overturned`, `t_overturn` (+inf when it did not overturn).
-    - `uplifted`, `t_uplift` (+inf when it never uplifted).
-    - `n_impacts`: impacts at θ = 0 (rigid model; 0 for spring models).
-    - `status`: a `Status` value; check `sol.status == jaxrock.Status.ok`.
-    - `ts`, `history`: only when a `Save` was given (dict field name → array over ts).
-    - `n_iterations`: loop iterations the run took (cost diagnostics).
-    """
-
-    max_theta: Float[Array, ""]
-    overturned: Bool[Array, ""]
-    t_overturn: Float[Array, ""]
-    uplifted: Bool[Array, ""]
-    t_uplift: Float[Array, ""]
-    n_impacts: Int[Array, ""]
-    status: Status
-    ts: Float[Array, " n"] | None = None
-    history: dict | None = None
-    n_iterations: Int[Array, ""] | int = 0
+class _AbstractSolution(eqx.Module):
+    """`Solution`'s methods (its fields come from `SUMMARY`)."""
 
     @property
     def ok(self):
         return self.status == Status.ok
+
+
+Solution = schema_module(
+    "Solution", _AbstractSolution,
+    "The result of one scene (or, under vmap, of a batch: every leaf gains leading axes).\n\n"
+    "The summary (`jaxrock.results.SUMMARY`):\n" + summary_doc() + "\n"
+    "- `status`: a `Status` value; check `sol.status == jaxrock.Status.ok`.\n"
+    "- `ts`, `history`: only when a `Save` was given (dict field name → array over ts).\n"
+    "- `n_iterations`: loop iterations the run took (cost diagnostics).\n",
+    {**{o.name: o.annotation for o in SUMMARY}, "status": Status, "ts": Float[Array, " n"] | None, "history": dict | None,
+     "n_iterations": Int[Array, ""] | int},
+    {"ts": None, "history": None, "n_iterations": 0},
+    __name__,
+)

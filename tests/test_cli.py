@@ -323,8 +323,9 @@ def test_spectrum_file_says_how_it_was_made(tmp_path):
                "--accel-min", 0.8, "--accel-max", 6, "--tol", 1e-6, "--refine", 0, "--out", out, "--quiet")
     assert r.exit_code == 0, r.output
     with xr.open_dataset(tmp_path / "spec.nc", engine="scipy") as ds:
+        units = {o.name: o.units for o in jr.SUMMARY}  # times in s; ratios, flags, counts and codes 1
         for name in [*ds.data_vars, *ds.coords]:
-            assert ds[name].attrs.get("units") == "1", name
+            assert ds[name].attrs.get("units") == units.get(name, "1"), name
         for name in ("overturned", "uplifted", "status"):
             values, meanings = ds[name].attrs["flag_values"], ds[name].attrs["flag_meanings"].split()
             assert len(np.atleast_1d(values)) == len(meanings) and list(np.atleast_1d(values)) == list(range(len(meanings)))

@@ -42,7 +42,7 @@ def test_spectrum_failed_cells_exit_1_after_writing(tmp_path):
                "--omega-min", 2, "--refine", 0, "--out", out, "--quiet")
     assert r.exit_code == 1, r.output
     assert "1 cell(s) ended with status solver_failed" in r.output
-    assert Spectrum.load(tmp_path / "spec.nc").status.ravel().tolist() == [jr.Status.solver_failed._value.item()]
+    assert Spectrum.load(tmp_path / "spec.nc").status.ravel().tolist() == [int(jr.status_codes(jr.Status.solver_failed))]
 
 
 @pytest.mark.slow
@@ -66,9 +66,8 @@ def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
     wr, ar = np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3)
     model = build_model("rigid", 10.0, 0.2)
     made = provenance.describe(model=model, excitation="RickerPulse", grid={"omega_ratio": wr, "accel_ratio": ar})
-    z = np.zeros(9)
-    provenance.append_checkpoint(Path(f"{out}.checkpoint"), made, slice(0, 9), dict(
-        max_theta=z, overturned=z.astype(bool), uplifted=z.astype(bool), status=z.astype(np.int32)))
+    cells = {o.name: np.zeros(9, o.dtype) for o in jr.SUMMARY} | {"status": np.zeros(9, np.int32)}
+    provenance.append_checkpoint(Path(f"{out}.checkpoint"), made, slice(0, 9), cells)
     r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
                "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet", "--pulse", "antisymmetric")
     assert r.exit_code == 2, r.output

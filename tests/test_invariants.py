@@ -102,7 +102,7 @@ def assert_self_consistent(sol: jr.Solution, threshold: float = 1.0):
     """A result never contradicts its own flags."""
     mt, over = np.asarray(sol.max_theta), np.asarray(sol.overturned)
     t_over, up = np.asarray(sol.t_overturn), np.asarray(sol.uplifted)
-    ok = np.asarray(sol.status._value) == 0
+    ok = np.asarray(jr.status_codes(sol.status)) == 0
     assert ok.all(), f"{(~ok).sum()} scenes failed: {set(jr.status_names(sol.status)[~ok])}"
     assert np.all(np.isfinite(mt))
     assert not np.any((mt >= threshold) & ~over), "max_theta at the threshold without overturning"

@@ -36,8 +36,15 @@ def _spectrum(shift=0.0, status_bad=False):
         status[3, 4] = 3
     return Spectrum(
         omega_ratio=w, accel_ratio=a, max_theta=theta, overturned=over, uplifted=uplifted, status=status,
+        t_overturn=np.where(over, 1.0, np.inf), t_uplift=np.where(uplifted, 0.0, np.inf), n_impacts=np.zeros(A.shape, np.int64),
         attrs={"model": "RigidModel", "tan_alpha": 0.2, "height": 10.0, "pulse": "RickerPulse", "alpha": 0.197, "p": 1.2},
     )
+
+
+def _cells(s, rows: slice, cols: slice):
+    """The spectrum's sub-grid of `rows` (a_p) × `cols` (ω_p)."""
+    grid = {k: getattr(s, k)[rows, cols] for k in (*jr.results.OUTPUTS, "status")}
+    return Spectrum(omega_ratio=s.omega_ratio[cols], accel_ratio=s.accel_ratio[rows], **grid, attrs=s.attrs)
 
 
 def _lines_by_style(ax):
@@ -74,8 +81,7 @@ def test_plot_spectrum_draws_the_spectrum_boundaries(tmp_path):
 def test_plot_spectrum_on_given_axes_and_degenerate_grid():
     fig, ax = plt.subplots()
     s = _spectrum()
-    one = Spectrum(omega_ratio=s.omega_ratio[:1], accel_ratio=s.accel_ratio, max_theta=s.max_theta[:, :1],
-                   overturned=s.overturned[:, :1], uplifted=s.uplifted[:, :1], status=s.status[:, :1], attrs=s.attrs)
+    one = _cells(s, slice(None), slice(0, 1))
     assert plot_spectrum(one, ax=ax, title="one column") is fig
     assert ax.get_title() == "one column"
     plt.close(fig)
@@ -86,9 +92,7 @@ def test_plot_spectrum_of_one_cell_draws_it_and_writes_its_value(i):
     """A 1 × 1 grid drew an empty frame (a one-point axis gives pcolormesh no cell width): now the
     cell is drawn ±5 % around its point, in its colour, with its value written on it."""
     s = _spectrum()
-    one = Spectrum(omega_ratio=s.omega_ratio[4:5], accel_ratio=s.accel_ratio[i:i + 1], max_theta=s.max_theta[i:i + 1, 4:5],
-                   overturned=s.overturned[i:i + 1, 4:5], uplifted=s.uplifted[i:i + 1, 4:5], status=s.status[i:i + 1, 4:5],
-                   attrs=s.attrs)
+    one = _cells(s, slice(i, i + 1), slice(4, 5))
     fig = plot_spectrum(one)
     ax = fig.axes[0]
     cell = ax.collections[0]

@@ -18,8 +18,8 @@ from .._validate import JaxrockInputError
 from ..io import provenance
 from ..io.files import exclusive, same_file
 from ..io.results_file import append_results, read_done, result_rows, results_path_for, rewrite_results, start_results
-from ..io.scenes_file import RESULT_COLUMNS, Scenes, read_scenes
-from ..results import STATUS_NAMES
+from ..io.scenes_file import Scenes, read_scenes
+from ..results import OUTPUTS, RESULT_COLUMNS, STATUS_NAMES
 from .engine import run_stacked
 
 
@@ -33,7 +33,7 @@ class BatchReport:
     n_groups: int
     seconds: float
     status_counts: dict = field(default_factory=dict)
-    n_overturned: int = 0
+    flag_counts: dict = field(default_factory=dict)  # each flag of the summary (overturned, uplifted, ...): rows where it is set
     path: Path | None = None
 
 
@@ -129,7 +129,7 @@ def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> Bat
         n_groups=len(todo),
         seconds=time.perf_counter() - t0,
         status_counts=counts,
-        n_overturned=sum(int(allrows[r]["overturned"]) for r in allrows),
+        flag_counts={name: sum(int(allrows[r][name]) for r in allrows) for name, o in OUTPUTS.items() if o.kind == "bool"},
         path=results,
     )
 

@@ -25,8 +25,8 @@ from ..excitation import Record
 from ..io import provenance
 from ..io.files import exclusive, write_atomically
 from ..model import AbstractIntegrator, AbstractModel
-from ..results import STATUS_NAMES
-from ..scene import AXES, pulse_class, pulse_of_ratios
+from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module, status_codes
+from ..scene import AXES, DEFAULT_PULSE, pulse_class, pulse_of_ratios
 from .engine import batch_limit, make_stepper, run_batch
 
 
@@ -36,24 +36,17 @@ def _flags(long_name: str, meanings, dtype=np.int8) -> dict:
             "flag_meanings": " ".join(meanings)}
 
 
-class Spectrum(eqx.Module):
-    """A labelled overturning spectrum.
+def _netcdf_variable(o, values, dims) -> tuple:
+    """A summary output (`jaxrock.results.Output`) as a netCDF variable: flags as CF flags (int8),
+    counts as int32 (netCDF-3 has no int64), numbers as they are."""
+    if o.kind == "bool":
+        return dims, values.astype(np.int8), {**_flags(o.name, ("no", o.name)), "long_name": o.meaning}
+    data = values.astype(np.int32) if o.kind == "int" else values
+    return dims, data, {"long_name": o.meaning, "units": o.units}
 
-    `max_theta[i, j]` is max |θ|/α′ at `accel_ratio[i]` = a_p/(g tanα′) and `omega_ratio[j]` =
-    ω_p/p′ (the threshold value, 1 by default, where the body overturns).
-    `attrs` describes the scene (model, α′, p′, pulse, ...). `uplift_line` and `overturn_line`,
-    when present, are the boundaries refined by bisection between grid rows (`refine_boundaries`).
-    """
 
-    omega_ratio: np.ndarray
-    accel_ratio: np.ndarray
-    max_theta: np.ndarray
-    overturned: np.ndarray
-    uplifted: np.ndarray
-    status: np.ndarray
-    attrs: dict
-    uplift_line: np.ndarray | None = None
-    overturn_line: np.ndarray | None = None
+class _AbstractSpectrum(eqx.Module):
+    """`Spectrum`'s methods (its fields come from `jaxrock.results.SUMMARY`)."""
 
     @property
     def ok(self) -> bool:
@@ -91,9 +84,7 @@ class Spectrum(eqx.Module):
         dims = ("accel_ratio", "omega_ratio")
         ds = xr.Dataset(
             {
-                "max_theta": (dims, self.max_theta, {"long_name": "max |theta|/alpha", "units": "1"}),
-                "overturned": (dims, self.overturned.astype(np.int8), _flags("overturned", ("no", "overturned"))),
-                "uplifted": (dims, self.uplifted.astype(np.int8), _flags("uplifted", ("no", "uplifted"))),
+                **{o.name: _netcdf_variable(o, getattr(self, o.name), dims) for o in SUMMARY},
                 "status": (dims, self.status.astype(np.int32), _flags("jaxrock.Status code", STATUS_NAMES, np.int32)),
                 "uplift_boundary": (("omega_ratio",), self.uplift_boundary, {"long_name": "least a_p/(g tan alpha) that uplifts", "units": "1"}),
                 "overturn_boundary": (("omega_ratio",), self.overturn_boundary, {"long_name": "least a_p/(g tan alpha) that overturns", "units": "1"}),
@@ -115,20 +106,43 @@ class Spectrum(eqx.Module):
 
     @classmethod
     def load(cls, path) -> "Spectrum":
+        """A spectrum written by `save`; a file without one of today's summary outputs (written by
+        an older jaxrock) is refused, naming what it lacks."""
         import xarray as xr
 
         with xr.open_dataset(path, engine="scipy") as ds:
+            missing = [name for name in (*OUTPUTS, "status") if name not in ds]
+            if missing:
+                raise JaxrockInputError(f"{path}: no variable(s) {', '.join(missing)} (written by jaxrock "
+                                        f"{ds.attrs.get('jaxrock_version', 'of another version')}); rerun the spectrum")
+            refined = bool(ds.attrs.get("refined"))
             return cls(
                 omega_ratio=ds["omega_ratio"].values.copy(),
                 accel_ratio=ds["accel_ratio"].values.copy(),
-                max_theta=ds["max_theta"].values.copy(),
-                overturned=ds["overturned"].values.astype(bool),
-                uplifted=ds["uplifted"].values.astype(bool),
+                **{name: ds[name].values.astype(o.dtype) for name, o in OUTPUTS.items()},
                 status=ds["status"].values.astype(np.int32),
                 attrs={k: v for k, v in ds.attrs.items() if k != "refined"},
-                uplift_line=ds["uplift_boundary"].values.copy() if ds.attrs.get("refined") else None,
-                overturn_line=ds["overturn_boundary"].values.copy() if ds.attrs.get("refined") else None,
+                uplift_line=ds["uplift_boundary"].values.copy() if refined else None,
+                overturn_line=ds["overturn_boundary"].values.copy() if refined else None,
             )
+
+
+Spectrum = schema_module(
+    "Spectrum", _AbstractSpectrum,
+    """A labelled overturning spectrum.
+
+    `max_theta[i, j]` is max |θ|/α′ at `accel_ratio[i]` = a_p/(g tanα′) and `omega_ratio[j]` =
+    ω_p/p′ (the threshold value, 1 by default, where the body overturns); every summary output
+    (`jaxrock.results.SUMMARY`) is an array of the grid's shape, and `status` holds the cells'
+    status codes (`jaxrock.results.STATUS_NAMES`). `attrs` describes the scene (model, α′, p′,
+    pulse, ...). `uplift_line` and `overturn_line`, when present, are the boundaries refined by
+    bisection between grid rows (`refine_boundaries`).
+    """,
+    {"omega_ratio": np.ndarray, "accel_ratio": np.ndarray, **{name: np.ndarray for name in OUTPUTS}, "status": np.ndarray,
+     "attrs": dict, "uplift_line": np.ndarray | None, "overturn_line": np.ndarray | None},
+    {"uplift_line": None, "overturn_line": None},
+    __name__,
+)
 
 
 def overturning_spectrum(
@@ -136,7 +150,7 @@ def overturning_spectrum(
     omega_ratio,
     accel_ratio,
     *,
-    pulse="symmetric",
+    pulse=DEFAULT_PULSE,
     integrator: AbstractIntegrator | None = None,
     batch_size: int = 4096,
     progress: bool = True,
@@ -146,7 +160,8 @@ def overturning_spectrum(
 ) -> Spectrum:
     """max |θ|/α′ of `model` over the grid `accel_ratio` (a_p/(g tanα′)) × `omega_ratio` (ω_p/p′).
 
-    - `pulse`: "symmetric" (Ricker) or "antisymmetric" (eq. 29).
+    - `pulse`: a pulse kind's name (`jaxrock.scene.PULSES`: "symmetric" Ricker, "antisymmetric"
+      eq. 29) or a pulse class.
     - `batch_size`: cells run together in one vmapped batch (memory bound).
     - `checkpoint`: a folder where each finished batch is added as its own file (nothing is
       rewritten); rerunning the same call after an interruption resumes from it, and it is
@@ -175,8 +190,8 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
     W, A = np.meshgrid(wr, ar)
     a_p, w_p = (np.asarray(x).ravel() for x in pulse_of_ratios(block, A, W))
     n = a_p.size
-    fields = ("max_theta", "overturned", "uplifted", "status")
-    out = {k: np.zeros(n, dtype=float if k == "max_theta" else (np.int32 if k == "status" else bool)) for k in fields}
+    fields = (*OUTPUTS, "status")
+    out = {name: np.zeros(n, dtype=o.dtype) for name, o in OUTPUTS.items()} | {"status": np.zeros(n, dtype=np.int32)}
     done = np.zeros(n, dtype=bool)
     made_by = provenance.describe(model=model, excitation=cls.__name__, integrator=integrator,
                                   grid={"omega_ratio": wr, "accel_ratio": ar})
@@ -194,10 +209,9 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
         sl = slice(s, min(s + batch_size, n))
         exc = jax.vmap(cls)(jnp.asarray(a_p[sl]), jnp.asarray(w_p[sl]))
         sol = run_batch(model, exc, integrator)
-        out["max_theta"][sl] = np.asarray(sol.max_theta)
-        out["overturned"][sl] = np.asarray(sol.overturned)
-        out["uplifted"][sl] = np.asarray(sol.uplifted)
-        out["status"][sl] = np.asarray(sol.status._value)
+        for name in OUTPUTS:
+            out[name][sl] = np.asarray(getattr(sol, name))
+        out["status"][sl] = np.asarray(status_codes(sol.status))
         done[sl] = True
         if ck is not None:
             provenance.append_checkpoint(ck, made_by, sl, {k: out[k][sl] for k in fields})
@@ -216,15 +230,7 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
         **provenance.file_attrs(model, integrator),
         "made_by": provenance.to_json(made_by),
     }
-    spec = Spectrum(
-        omega_ratio=wr,
-        accel_ratio=ar,
-        max_theta=out["max_theta"].reshape(shape),
-        overturned=out["overturned"].reshape(shape),
-        uplifted=out["uplifted"].reshape(shape),
-        status=out["status"].reshape(shape),
-        attrs=attrs,
-    )
+    spec = Spectrum(omega_ratio=wr, accel_ratio=ar, **{k: v.reshape(shape) for k, v in out.items()}, attrs=attrs)
     if int(refine) > 0:
         spec = refine_boundaries(model, spec, pulse=pulse, iterations=int(refine), integrator=integrator)
     if ck is not None and ck.exists() and not keep_checkpoint:
@@ -236,7 +242,7 @@ def refine_boundaries(
     model: AbstractModel,
     spectrum: Spectrum,
     *,
-    pulse="symmetric",
+    pulse=DEFAULT_PULSE,
     iterations: int = 12,
     integrator: AbstractIntegrator | None = None,
 ) -> Spectrum:

@@ -15,7 +15,8 @@ import typer
 
 from .guards import (CELL_SECONDS, EXIT_INTERRUPTED, EXIT_UNTRUSTED, RECORD_RUN_SECONDS, _estimate, _exit_if_untrusted, _guarded,
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts)
-from ..io.scenes_file import MODEL_PARAMETERS, RESULT_COLUMNS
+from ..io.scenes_file import MODEL_PARAMETERS
+from ..results import OUTPUTS, RESULT_COLUMNS, status_codes
 from ..spring.base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING
 from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, PULSES, RECORD_ALIASES, UNDAMPED, model_kinds, parameter_help
 from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model, even_batch,
@@ -191,7 +192,7 @@ def simulate(
         fig = plot_history(hist, exc, model=m, path=plot, title=f"{model.value}, 2h = {height:g} m, tanα = {tan_alpha:g}\n{desc}")
         plt.close(fig)
         typer.echo(f"wrote {plot}")
-    _exit_if_untrusted(_status_counts(sol.status._value), "run")
+    _exit_if_untrusted(_status_counts(status_codes(sol.status)), "run")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -227,7 +228,8 @@ def batch(
         f"{rep.n_rows} rows: {rep.n_run} run in {rep.n_groups} group(s), {rep.n_skipped} skipped (already done); "
         f"{rep.seconds:.1f} s"
     )
-    typer.echo(f"overturned: {rep.n_overturned}; status: " + ", ".join(f"{k} {v}" for k, v in rep.status_counts.items()))
+    typer.echo("; ".join(f"{OUTPUTS[k].label}: {v}" for k, v in rep.flag_counts.items()) + "; status: "
+               + ", ".join(f"{k} {v}" for k, v in rep.status_counts.items()))
     typer.echo(f"wrote {rep.path}")
     _exit_if_untrusted(rep.status_counts, "row(s)")
 
@@ -268,7 +270,7 @@ def record_spectrum(
     if refine < 0:
         raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
     m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
-    exc, desc = _excitation(m.block, "symmetric", record, 1.0, None, None, None, None, units)
+    exc, desc = _excitation(m.block, DEFAULT_PULSE, record, 1.0, None, None, None, None, units)
     out = output_stem(out, "record_spectrum")
     for suffix in (".nc", ".csv", ".png"):
         check_writable("--out", Path(f"{out}{suffix}"))

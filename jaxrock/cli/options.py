@@ -122,8 +122,17 @@ def even_batch(n: int, limit: int) -> int:
     return min(n, limit)
 
 
+def _grid_line(o, values) -> str:
+    """A summary output over a spectrum's cells: a flag's count and share, else its range."""
+    if o.kind == "bool":
+        return f"{o.label}: {int(values.sum())} cells ({100 * values.mean():.1f} %)"
+    fin = values[np.isfinite(values)]
+    unit = "" if o.units == "1" else f" {o.units}"
+    return f"{o.label}: " + (f"{fin.min():.4g} … {fin.max():.4g}{unit}" if fin.size else "none")
+
+
 def spectrum_summary(spec, seconds: float) -> str:
-    from ..results import STATUS_NAMES
+    from ..results import STATUS_NAMES, SUMMARY
 
     a = spec.attrs
     n_a, n_w = spec.max_theta.shape
@@ -135,8 +144,7 @@ def spectrum_summary(spec, seconds: float) -> str:
         f"(rocking α = {float(a['alpha']):.4g} rad, p = {float(a['p']):.4g} rad/s)",
         f"grid: {n_w} ω_p/p in [{spec.omega_ratio[0]:g}, {spec.omega_ratio[-1]:g}] × {n_a} a_p/(g tanα) in "
         f"[{spec.accel_ratio[0]:g}, {spec.accel_ratio[-1]:g}] = {n} cells in {seconds:.1f} s ({1e3 * seconds / n:.2f} ms/cell)",
-        f"overturned: {int(spec.overturned.sum())} cells ({100 * spec.overturned.mean():.1f} %), "
-        f"uplifted: {int(spec.uplifted.sum())} ({100 * spec.uplifted.mean():.1f} %)",
+        *(_grid_line(o, getattr(spec, o.name)) for o in SUMMARY),
         "status: " + ", ".join(f"{STATUS_NAMES[k]} {int(c)}" for k, c in enumerate(np.bincount(spec.status.ravel(), minlength=len(STATUS_NAMES))) if c),
     ]
     for name, b in (("uplift", spec.uplift_boundary), ("overturning", spec.overturn_boundary)):
@@ -195,17 +203,10 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
 
 
 def solution_summary(sol, model) -> str:
-    from ..results import status_names
+    """One scene's summary outputs (`jaxrock.results.SUMMARY`), one per line, and its status."""
+    from ..results import SUMMARY, status_names
 
-    a = float(model.block.alpha_r)
-    t_over = float(np.asarray(sol.t_overturn))
-    t_up = float(np.asarray(sol.t_uplift))
-    lines = [
-        f"max θ/α = {float(np.asarray(sol.max_theta)):.6f}",
-        f"overturned: {'yes, at t = %.4f s' % t_over if bool(np.asarray(sol.overturned)) else 'no'}",
-        f"uplifted: {'yes, at t = %.4f s' % t_up if bool(np.asarray(sol.uplifted)) else 'no'}",
-        f"impacts: {int(np.asarray(sol.n_impacts))}",
-        f"status: {status_names(sol.status)}",
-        f"(α = {a:.5g} rad, p = {float(model.block.p_r):.5g} rad/s)",
-    ]
+    lines = [o.line(np.asarray(getattr(sol, o.name))) for o in SUMMARY]
+    lines += [f"status: {status_names(sol.status)}",
+              f"(α = {float(model.block.alpha_r):.5g} rad, p = {float(model.block.p_r):.5g} rad/s)"]
     return "\n".join(lines)

@@ -11,26 +11,18 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import JaxrockInputError
-from ..results import STATUS_NAMES
+from ..results import OUTPUTS, RESULT_COLUMNS, STATUS_NAMES, status_codes
 from .files import output_stem, write_atomically
-from .scenes_file import RESULT_COLUMNS, Scenes
+from .scenes_file import Scenes
 from .tables import cell, csv_text
 
 
 def result_rows(sol, k: int) -> list[dict]:
-    """The result cells of the first `k` lanes of a batch's `Solution`."""
-    col = {f: np.asarray(getattr(sol, f))[:k] for f in ("max_theta", "overturned", "t_overturn", "uplifted", "t_uplift", "n_impacts")}
-    status = np.asarray(sol.status._value)[:k]
+    """The result cells (`RESULT_COLUMNS`) of the first `k` lanes of a batch's `Solution`."""
+    col = {name: np.asarray(getattr(sol, name))[:k] for name in OUTPUTS}
+    status = np.asarray(status_codes(sol.status))[:k]
     return [
-        {
-            "max_theta": cell(float(col["max_theta"][i])),
-            "overturned": str(int(col["overturned"][i])),
-            "t_overturn": cell(float(col["t_overturn"][i])),
-            "uplifted": str(int(col["uplifted"][i])),
-            "t_uplift": cell(float(col["t_uplift"][i])),
-            "n_impacts": str(int(col["n_impacts"][i])),
-            "status": STATUS_NAMES[int(status[i])],
-        }
+        {**{name: cell(o.csv_value(col[name][i])) for name, o in OUTPUTS.items()}, "status": STATUS_NAMES[int(status[i])]}
         for i in range(k)
     ]
 

@@ -20,11 +20,13 @@ column and the valid range.
 
 Results file
 ------------
-The column `row` (the scene's row number), the scene's input columns as given, then:
-`max_theta` (max |θ|/α′; 1 = threshold when it overturned), `overturned` (0/1), `t_overturn` [s]
-(`inf` when it did not overturn), `uplifted` (0/1), `t_uplift` [s] (`inf` if never),
-`n_impacts` (rigid model; 0 for spring models), `status` (`ok`, or why the numbers are not to be
-trusted: see `jaxrock.Status`). Results are appended after every batch, so an interrupted run
+The column `row` (the scene's row number), the scene's input columns as given, then the summary
+outputs (`jaxrock.results.SUMMARY`; floats written exactly, flags as 0/1):
+
+<the summary outputs: `jaxrock.results.summary_doc()`>
+- `status`: `ok`, or why the numbers are not to be trusted (see `jaxrock.Status`).
+
+Results are appended after every batch, so an interrupted run
 keeps its finished rows; `resume=True` (`--resume`) skips the rows already in the results file
 (their inputs must be unchanged). When all rows are done the file is rewritten in row order.
 
@@ -59,15 +61,16 @@ from ..geometry import TAN_ALPHA_MIN, Block
 from ..model import MODEL_KINDS
 from ..scene import (CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA, DEFAULT_MODEL, DEFAULT_PULSE, PULSES, RECORD_ALIASES, model_kinds,
                      is_builtin_record, parameter_table, parameters, pulse_of_ratios, takes)
+from ..results import RESULT_COLUMNS, summary_doc
 from .tables import csv_text
 
-__doc__ = __doc__.replace("<the scene's parameters: `jaxrock.scene.parameter_table()`>", parameter_table())
+__doc__ = (__doc__.replace("<the scene's parameters: `jaxrock.scene.parameter_table()`>", parameter_table())
+           .replace("<the summary outputs: `jaxrock.results.summary_doc()`>", summary_doc()))
 INPUT_COLUMNS = tuple(p.name.lower() for p in parameters())  # lower-cased, as the header's names are read
 # Columns copied to the results unchanged (labels); any other unknown column is an error naming
 # the closest known one (a typo such as `modle` ran the rigid model in silence).
 PASS_THROUGH = ("id", "name", "label", "group", "note", "notes", "comment")
 PASS_THROUGH_PREFIX = "x_"
-RESULT_COLUMNS = ("max_theta", "overturned", "t_overturn", "uplifted", "t_uplift", "n_impacts", "status")
 MODEL_PARAMETERS = ("eta", "cbar", "E", "rho", "zeta")  # model parameter columns (lower-cased in files)
 
 
@@ -273,7 +276,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     a_of_ratio, w_of_ratio = pulse_of_ratios(blocks, a_r, w_r)
     a_p, w_p = np.where(by_a, a_p, np.asarray(a_of_ratio)), np.where(by_w, w_p, np.asarray(w_of_ratio))
     for col in ("a_p", "accel_ratio", "omega_p", "omega_ratio"):
-        t.fail(~is_pulse & t.has(col), col, "applies only to Ricker pulses (pulse = symmetric / antisymmetric), not to a record")
+        t.fail(~is_pulse & t.has(col), col, f"applies only to pulses (pulse = {' / '.join(PULSES)}), not to a record")
     scale = t.num("scale", 0.0, math.inf, hi_open=True, rows=~is_pulse)
     params.update(a_p=a_p, omega_p=w_p, scale=np.where(np.isnan(scale), 1.0, scale))
 

@@ -61,7 +61,7 @@ class Column(eqx.Module):
 
     @classmethod
     def concrete(cls, A=None, I=None) -> "Column":
-        """Concrete: E = 30 GPa, ρ = 2500 kg/m³ (paper sections 4–6; `jaxrock.scene`)."""
+        """Concrete: `jaxrock.scene.CONCRETE_E` and `CONCRETE_RHO` (paper sections 4–6)."""
         return cls(CONCRETE_E, CONCRETE_RHO, A, I)
 
     @classmethod
