@@ -20,7 +20,7 @@ import equinox as eqx
 import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Bool, PyTree
+from jaxtyping import Array, Bool, Float, PyTree
 
 from ._validate import JaxrockInputError, Limit, check_one_scene, check_range, is_concrete, within_limits
 from .excitation import AbstractExcitation
@@ -174,7 +174,7 @@ class AbstractModel(eqx.Module):
     """A rocking body model: rigid (`RigidModel`) or spring (`SpringModel`)."""
 
     block: eqx.AbstractVar[Block]
-    threshold: eqx.AbstractVar[float]
+    threshold: eqx.AbstractVar[Float[Array, ""]]  # overturned at |θ| ≥ threshold·α′
 
     @abc.abstractmethod
     def default_integrator(self) -> AbstractIntegrator:

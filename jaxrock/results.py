@@ -121,7 +121,7 @@ class Save(eqx.Module):
     """An output request: save a time history at times `ts` [s] (absolute time).
 
     `fields` names what to save; each model lists the fields it can give
-    (rigid: "theta", "omega"; spring models more, see `jaxrock.spring`).
+    (rigid: "theta", "theta_dot"; spring models more, see `jaxrock.spring`).
     """
 
     ts: Float[Array, " n"]

@@ -6,27 +6,19 @@ runs in-process under CliRunner, so its jitted functions are reused by the direc
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 
 import equinox as eqx
-import jax.numpy as jnp
 import numpy as np
 import pytest
-from typer.testing import CliRunner
-
 import jaxrock as jr
-from jaxrock.cli import app, even_batch, parse_values
+from helpers import invoke, read_csv
+from jaxrock.cli import even_batch, parse_values
 from jaxrock.analyses.spectra import Spectrum, overturning_spectrum
 
-runner = CliRunner()
 # jaxrock.simulate, jitted: the same compiled function as the CLI's (shared cache per function)
 _jit_sim = eqx.filter_jit(jr.simulate)
-
-
-def invoke(*args):
-    return runner.invoke(app, [str(a) for a in args])
 
 
 # -- spectrum --------------------------------------------------------------------------------------
@@ -181,112 +173,6 @@ def test_simulate_bad_input_exits_2(args, name):
     assert name in r.output and "Traceback" not in r.output
 
 
-# -- batch -----------------------------------------------------------------------------------------
-SCENES = """id,height,tan_alpha,width,pulse,accel_ratio,a_p,omega_ratio,omega_p,eta
-a,10,0.2,,symmetric,4,,,6.283185307179586,
-b,5,0.15,,symmetric,3,,2,,0.9
-# a comment line
-c,20,,2,symmetric,,5,3,,1
-"""
-
-
-def _write(path, text):
-    path.write_text(text)
-    return path
-
-
-def _read(path):
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
-
-
-def _direct(row):
-    """The scene of one row, built by hand, run by `simulate`."""
-    h = float(row["height"])
-    ta = float(row["tan_alpha"]) if row["tan_alpha"] else float(row["width"]) / h
-    block = jr.Block.from_slenderness(h, ta)
-    a_p = float(row["a_p"]) if row["a_p"] else float(row["accel_ratio"]) * 9.81 * ta
-    w = float(row["omega_p"]) if row["omega_p"] else float(row["omega_ratio"]) * float(block.p)
-    eta = float(row["eta"]) if row["eta"] else float(block.eta)
-    model = jr.RigidModel(block, eta=jnp.asarray(eta))
-    return _jit_sim(model, jr.RickerPulse(a_p, w))
-
-
-def test_batch_round_trip_and_resume(tmp_path):
-    scenes = _write(tmp_path / "scenes.csv", SCENES)
-    (tmp_path / "out").mkdir()
-    r = invoke("batch", scenes, tmp_path / "out", "--quiet")  # a folder: the results go inside it
-    assert r.exit_code == 0, r.output
-    res = tmp_path / "out" / "scenes_results.csv"
-    rows = _read(res)
-    assert [x["row"] for x in rows] == ["1", "2", "3"]
-    assert [x["id"] for x in rows] == ["a", "b", "c"]
-    for x in rows:
-        sol = _direct(x)
-        assert float(x["max_theta"]) == pytest.approx(float(sol.max_theta), abs=1e-9)
-        assert int(x["overturned"]) == int(sol.overturned)
-        assert float(x["t_overturn"]) == pytest.approx(float(sol.t_overturn), abs=1e-9) if sol.overturned else x["t_overturn"] == "inf"
-        assert int(x["uplifted"]) == int(sol.uplifted)
-        assert int(x["n_impacts"]) == int(sol.n_impacts)
-        assert x["status"] == "ok"
-
-    # an interrupted run: only row 2 finished (its result marked to show it is kept, not rerun)
-    with open(res) as fh:
-        lines = fh.read().splitlines()
-    kept = lines[2].split(",")
-    kept[-7] = "0.123456"  # max_theta
-    _write(res, lines[0] + "\n" + ",".join(kept) + "\n" + "1,a,10")  # + a partly written line
-    r = invoke("batch", scenes, res, "--resume", "--quiet")
-    assert r.exit_code == 0, r.output
-    assert "1 skipped" in r.output and "2 run" in r.output
-    again = _read(res)
-    assert [x["row"] for x in again] == ["1", "2", "3"]
-    assert again[1]["max_theta"] == "0.123456"
-    for a, b in ((again[0], rows[0]), (again[2], rows[2])):
-        # rerun in other batches: equal to the root-finding tolerance, not bitwise
-        assert {k: v for k, v in a.items() if k not in ("max_theta", "t_overturn", "t_uplift")} == {
-            k: v for k, v in b.items() if k not in ("max_theta", "t_overturn", "t_uplift")
-        }
-        for k in ("max_theta", "t_overturn", "t_uplift"):
-            assert float(a[k]) == pytest.approx(float(b[k]), abs=1e-9)
-
-    # resuming against changed inputs is refused
-    _write(scenes, SCENES.replace("b,5,0.15", "b,6,0.15"))
-    r = invoke("batch", scenes, res, "--resume", "--quiet")
-    assert r.exit_code == 2 and "row 2" in r.output
-
-
-@pytest.mark.parametrize(
-    "bad, where",
-    [
-        ("b,5,1.5,,symmetric,3,,2,,", ["row 2", "line 3", "'tan_alpha'", "[0.001, 1)"]),
-        ("b,-5,0.1,,symmetric,3,,2,,", ["row 2", "'height'", "(0, inf)"]),
-        ("b,5,0.1,,symmetric,3,,abc,,", ["row 2", "'omega_ratio'", "not a number"]),
-        ("b,5,0.1,,triangle,3,,2,,", ["row 2", "'pulse'", "symmetric"]),
-        ("b,5,0.1,,symmetric,,,2,,", ["row 2", "'a_p'", "accel_ratio"]),
-        ("b,5,0.1,0.5,symmetric,3,,2,,", ["row 2", "'tan_alpha'", "width"]),
-        ("b,5,0.1,,symmetric,3,,2,,1.5", ["row 2", "'eta'", "[0, 1]"]),
-    ],
-)
-def test_batch_malformed_row_fails_before_running(tmp_path, bad, where):
-    lines = SCENES.splitlines()
-    lines[2] = bad
-    scenes = _write(tmp_path / "scenes.csv", "\n".join(lines) + "\n")
-    res = tmp_path / "results.csv"
-    r = invoke("batch", scenes, res, "--quiet")
-    assert r.exit_code == 2, r.output
-    for w in where:
-        assert w in r.output, (w, r.output)
-    assert "Traceback" not in r.output
-    assert not res.exists()  # nothing ran
-
-
-def test_batch_parameter_for_wrong_model(tmp_path):
-    scenes = _write(tmp_path / "s.csv", "height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,spring,3,2,0.5\n")
-    r = invoke("batch", scenes, tmp_path / "r.csv")
-    assert r.exit_code == 2 and "'eta'" in r.output and "rigid" in r.output
-
-
 # -- record spectrum, calibrate ------------------------------------------------------------------
 def test_record_spectrum_equals_library(tmp_path):
     from jaxrock.analyses.spectra import record_overturning_scale
@@ -299,7 +185,7 @@ def test_record_spectrum_equals_library(tmp_path):
     r = invoke("record-spectrum", "--record", rec_file, "--heights", "1,4", "--scales", "0.5:8:4", "--refine", 3,
                "--tan-alpha", 0.2, "--out", tmp_path / "rs", "--quiet")
     assert r.exit_code == 0, r.output
-    rows = _read(tmp_path / "rs" / "record_spectrum.csv")
+    rows = read_csv(tmp_path / "rs" / "record_spectrum.csv")
     ref = record_overturning_scale(jr.RigidModel(jr.Block.from_slenderness(1.0, 0.2)), jr.read_record(rec_file),
                                    [1.0, 4.0], np.linspace(0.5, 8, 4), refine=3, progress=False)
     np.testing.assert_allclose([float(x["least_scale"]) for x in rows], ref.scale)
@@ -339,5 +225,5 @@ def test_spectrum_file_says_how_it_was_made(tmp_path):
     # the model, grid and batch of test_spectrum_writes_nc_equal_to_library_and_png: its program is reused
     rigid_model = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
     rigid = overturning_spectrum(rigid_model, np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3), batch_size=9, progress=False)
-    assert rigid.attrs["eta"] == pytest.approx(float(rigid_model.restitution), rel=1e-15)
+    assert rigid.attrs["eta"] == pytest.approx(float(rigid_model.eta), rel=1e-15)
     assert "EventIntegrator(" in rigid.attrs["integrator"]

@@ -20,7 +20,7 @@ import typer
 import jaxrock as jr
 from jaxrock import JaxrockInputError
 from jaxrock.analyses.spectra import Spectrum
-from test_cli import _write, invoke
+from helpers import invoke, write
 
 # -- honest exits: a run that is not ok exits 1 with a line saying what to change -----------------
 def test_simulate_failed_status_exits_1_with_advice():
@@ -200,7 +200,7 @@ def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, mon
     rec = tmp_path / "rec.txt"
     t = np.arange(100) * 0.02
     rec.write_text("".join(f"{x:.17g} {0.3 * np.sin(3 * x):.17g}\n" for x in t))
-    scenes = _write(tmp_path / "scenes.csv", "height,tan_alpha,pulse,scale\n10,0.2,rec.txt,1\n5,0.2,rec.txt,2\n")
+    scenes = write(tmp_path / "scenes.csv", "height,tan_alpha,pulse,scale\n10,0.2,rec.txt,1\n5,0.2,rec.txt,2\n")
     res = tmp_path / "results.csv"
     r = invoke("batch", scenes, res, "--quiet")
     assert r.exit_code == 0, r.output
@@ -223,7 +223,7 @@ def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, mon
 # -- files the user names -----------------------------------------------------------------------
 def test_results_file_that_is_a_hard_link_to_the_scenes_is_refused(tmp_path):
     """A hard link is the same file under another name: it was overwritten (symbolic links were caught)."""
-    scenes = _write(tmp_path / "scenes.csv", "height,tan_alpha,accel_ratio,omega_ratio\n5,0.2,2,3\n")
+    scenes = write(tmp_path / "scenes.csv", "height,tan_alpha,accel_ratio,omega_ratio\n5,0.2,2,3\n")
     os.link(scenes, tmp_path / "results.csv")
     before = scenes.read_bytes()
     r = invoke("batch", scenes, tmp_path / "results.csv")
@@ -286,7 +286,7 @@ def test_typos_and_out_of_range_values_are_refused_before_the_work(tmp_path, mon
 
 def test_misspelt_batch_column_is_refused_naming_the_close_match(tmp_path):
     """`modle=spring` was copied through and the row ran the rigid model."""
-    scenes = _write(tmp_path / "scenes.csv", "id,height,tan_alpha,modle,accel_ratio,omega_ratio\na,10,0.2,spring,3,2\n")
+    scenes = write(tmp_path / "scenes.csv", "id,height,tan_alpha,modle,accel_ratio,omega_ratio\na,10,0.2,spring,3,2\n")
     r = invoke("batch", scenes, tmp_path / "res.csv")
     assert r.exit_code == 2 and "unknown column 'modle'; did you mean 'model'?" in r.output, r.output
     assert not (tmp_path / "res.csv").exists()

@@ -557,10 +557,10 @@ def test_history_peak_is_the_summary_peak():
     model = SpringModel(QR_BLOCK)
     summ = simulate(model, ex, integrator=GA6)
     ts = jnp.linspace(float(ex.t_start), float(ex.t_end) + 10.0, 20001)
-    h = simulate(model, ex, integrator=GA6, save=Save(ts, ("theta", "omega")))
+    h = simulate(model, ex, integrator=GA6, save=Save(ts, ("theta", "theta_dot")))
     assert is_ok(h) and is_ok(summ)
     th = np.asarray(h.history["theta"])
-    assert np.all(np.isfinite(th)) and np.all(np.isfinite(np.asarray(h.history["omega"])))
+    assert np.all(np.isfinite(th)) and np.all(np.isfinite(np.asarray(h.history["theta_dot"])))
     al = float(QR_BLOCK.alpha)
     assert float(h.max_theta) == pytest.approx(float(summ.max_theta), abs=1e-9)
     dense = np.max(np.abs(th)) / al

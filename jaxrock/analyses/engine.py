@@ -4,7 +4,11 @@ generalized-α spring runs) a batch is advanced a few loop steps at a time and t
 running are gathered into a smaller batch between passes, so that a few long cells (chattering
 near the uplift line, rocking near the overturning line) do not make the whole batch wait; else
 it is one vmapped solve. Every scene is guarded as `simulate` guards it. Used by the spectra, the
-scenes files and any sweep."""
+scenes files and any sweep.
+
+Three calls, three sizes: `simulate` runs one scene; `run_batch` a batch in memory (one model for
+every excitation, or one per scene with `model_batched`); `run_scenes`
+(`jaxrock.analyses.scenes`) a scenes file, grouped into such batches."""
 
 from __future__ import annotations
 
@@ -144,8 +148,3 @@ def run_batch(
     else:
         sol = _solve(stepper, excitations, model_batched)
     return _flag(sol, ok)
-
-
-def run_stacked(model, exc):
-    """Summaries of a stacked batch (every array leaf of `model` and `exc` has the batch axis)."""
-    return run_batch(model, exc, model_batched=True)

@@ -20,7 +20,7 @@ from ..io.files import exclusive, same_file
 from ..io.results_file import append_results, read_done, result_rows, results_path_for, rewrite_results, start_results
 from ..io.scenes_file import Scenes, read_scenes
 from ..results import OUTPUTS, RESULT_COLUMNS, STATUS_NAMES
-from .engine import run_stacked
+from .engine import run_batch
 
 
 @dataclass
@@ -109,7 +109,7 @@ def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> Bat
         for part in _chunks(list(idx), chunk_size):
             interrupt.stop_point()
             index = np.asarray(part + [part[0]] * (_pad_size(len(part), chunk_size) - len(part)))
-            sol = run_stacked(scenes.model(kind, index), scenes.excitation(exc, index))
+            sol = run_batch(scenes.model(kind, index), scenes.excitation(exc, index), model_batched=True)
             records = [{"row": str(int(scenes.rows[i])), **scenes.values[i], **res} for i, res in zip(part, result_rows(sol, len(part)))]
             append_results(results, fields, records)
             new.update({int(rec["row"]): rec for rec in records})

@@ -61,9 +61,9 @@ class _AbstractSpectrum(eqx.Module):
         """Cells whose result contradicts its own flags (none, in a correct run): max_theta at the
         threshold without overturning, overturned with another max_theta, or overturned without
         uplifting. Failed cells (status ≠ ok) are not judged."""
-        thr = float(self.attrs.get("threshold", 1.0))
+        threshold = float(self.attrs.get("threshold", 1.0))
         over = self.overturned
-        bad = ((self.max_theta >= thr) & ~over) | (over & (self.max_theta != thr)) | (over & ~self.uplifted)
+        bad = ((self.max_theta >= threshold) & ~over) | (over & (self.max_theta != threshold)) | (over & ~self.uplifted)
         return bad & (self.status == 0)
 
     @property

@@ -68,8 +68,8 @@ def file_attrs(model, integrator=None) -> dict:
         "jax_version": jax.__version__,
         "integrator": repr(model.default_integrator() if integrator is None else integrator),
     }
-    if hasattr(model, "restitution"):
-        attrs["eta"] = float(np.asarray(model.restitution))
+    if hasattr(model, "eta"):
+        attrs["eta"] = float(np.asarray(model.eta))
     if hasattr(model, "cbar"):
         attrs["cbar"] = float(np.asarray(model.cbar))
     return attrs

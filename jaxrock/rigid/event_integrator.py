@@ -95,7 +95,7 @@ class EventIntegrator(AbstractIntegrator):
 class _Carry(eqx.Module):
     t: Array
     theta: Array
-    omega: Array
+    theta_dot: Array
     side: Array
     mode: Array
     rec: Record  # peak, uplift, overturn so far
@@ -114,7 +114,7 @@ class _Scene(NamedTuple):
     p: Array
     eta: Array
     level: Array  # uplift acceleration g tanα′
-    thr: Array  # overturning |θ|/α′
+    threshold: Array  # overturning |θ|/α′
     t_end: Array  # excitation end
     t_stop: Array  # run end: excitation end (summary) or t1 (history)
     h_nom: Array  # nominal step
@@ -157,9 +157,9 @@ class RigidStepper(AbstractStepper):
         return _Scene(
             alpha=block.alpha_r,
             p=p,
-            eta=model.restitution,
+            eta=model.eta,
             level=block.uplift_acceleration,
-            thr=jnp.asarray(model.threshold, dtype=float),
+            threshold=jnp.asarray(model.threshold, dtype=float),
             t_end=t_end,
             t_stop=t_end if self.summary_only else jnp.asarray(self.t1, dtype=float),
             h_nom=jnp.minimum(exc.max_step, 0.05 / p),
@@ -175,7 +175,7 @@ class RigidStepper(AbstractStepper):
         return _Carry(
             t=jnp.asarray(exc.t_start, dtype),
             theta=zero,
-            omega=zero,
+            theta_dot=zero,
             side=jnp.ones((), dtype),
             mode=jnp.asarray(_REST),
             rec=Record.start(),
@@ -204,7 +204,7 @@ class RigidStepper(AbstractStepper):
         return self._rock_step(sc, exc, c, (c.mode == _ROCKING) & ~c.finished)
 
     def _will_overturn(self, sc: _Scene, c: _Carry):
-        return self.model.free_peak(c.theta, c.omega, c.side) >= sc.thr
+        return self.model.free_peak(c.theta, c.theta_dot, c.side) >= sc.threshold
 
     def _segment_end(self, sc: _Scene, c: _Carry):
         # Summary runs stop at the end of the excitation unless the free motion overturns.
@@ -244,13 +244,13 @@ class RigidStepper(AbstractStepper):
 
     def _rock_step(self, sc: _Scene, exc: AbstractExcitation, c: _Carry, is_rocking) -> _Carry:
         model, integ, save, summary_only = self.model, self.integrator, self.save, self.summary_only
-        alpha, p, eta, thr, t_end, h_nom, tiny = sc.alpha, sc.p, sc.eta, sc.thr, sc.t_end, sc.h_nom, sc.tiny
+        alpha, p, eta, threshold, t_end, h_nom, tiny = sc.alpha, sc.p, sc.eta, sc.threshold, sc.t_end, sc.h_nom, sc.tiny
         term, event, controller = self._diffrax_parts(sc, exc)
         t_seg = jnp.where(is_rocking, self._segment_end(sc, c), c.t)
         acc0 = model.acceleration(c.t, c.theta, c.side, exc)
         at_zero = c.theta == 0
         dt_min = self._min_step(sc, c.t)
-        dt_flight = 0.05 * jnp.abs(c.omega) / jnp.maximum(jnp.abs(acc0), tiny)
+        dt_flight = 0.05 * jnp.abs(c.theta_dot) / jnp.maximum(jnp.abs(acc0), tiny)
         dt0 = jnp.where(at_zero, jnp.clip(dt_flight, dt_min, h_nom), h_nom)
         dt0 = jnp.where(c.dt_next > 0, c.dt_next, dt0)
         t_win = jnp.minimum(t_seg, c.t + integ.chunk_steps * h_nom)
@@ -265,7 +265,7 @@ class RigidStepper(AbstractStepper):
             c.t,
             t_win,
             dt0,
-            (c.theta, c.omega),
+            (c.theta, c.theta_dot),
             args=c.side,
             saveat=saveat,
             stepsize_controller=controller,
@@ -281,7 +281,7 @@ class RigidStepper(AbstractStepper):
             throw=False,
         )
         tf = sol.ts[-1]
-        thf, omf = sol.ys[0][-1], sol.ys[1][-1]
+        thf, theta_dot_f = sol.ys[0][-1], sol.ys[1][-1]
         hit_over, hit_apex, hit_impact = sol.event_mask
         hit_impact, hit_apex, hit_over = (hit_impact & is_rocking, hit_apex & is_rocking, hit_over & is_rocking)
         # A grazing uplift: |üg| a hair above g tanα′ while the rounded moment about the corner
@@ -289,7 +289,7 @@ class RigidStepper(AbstractStepper):
         # crossing from exactly 0. It counts as an uplift (|üg| exceeded the level) that returns to
         # rest at once, and the next exceedance is searched a resolvable instant later (the
         # window may hold a real uplift): never a failure.
-        fresh = (c.theta == 0) & (c.omega == 0)
+        fresh = (c.theta == 0) & (c.theta_dot == 0)
         back_to_rest = is_rocking & fresh & ~hit_impact & ~hit_over & (c.side * thf <= 0)
         chunked = is_rocking & ~(hit_impact | hit_apex | hit_over) & (tf < t_seg)
         n_acc = jnp.maximum(sol.stats["num_accepted_steps"], 1)
@@ -303,27 +303,27 @@ class RigidStepper(AbstractStepper):
         if hist is not None:
             inwin = is_rocking & (save.ts >= c.t) & (save.ts <= tf)
             ys = jax.vmap(sol.evaluate)(jnp.clip(save.ts, c.t, tf))
-            new = {"theta": jnp.where(back_to_rest, 0.0, ys[0]), "omega": jnp.where(back_to_rest, 0.0, ys[1])}
+            new = {"theta": jnp.where(back_to_rest, 0.0, ys[0]), "theta_dot": jnp.where(back_to_rest, 0.0, ys[1])}
             hist = {k: jnp.where(inwin, new[k], v) for k, v in hist.items()}
             # after overturning, hold the overturning state (the fall itself is not modelled)
             after = hit_over & (save.ts > tf)
-            hold = {"theta": c.side * thr * alpha, "omega": omf}
+            hold = {"theta": c.side * threshold * alpha, "theta_dot": theta_dot_f}
             hist = {k: jnp.where(after, hold[k], v) for k, v in hist.items()}
 
         # impact (eq. 3)
-        omega_imp = eta * omf
+        theta_dot_impact = eta * theta_dot_f
         side_imp = -c.side
         s_ug = side_imp * exc(tf) / G
         a_s = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) + s_ug)
         a_o = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) - s_ug)
-        v = jnp.abs(omega_imp)
+        v = jnp.abs(theta_dot_impact)
         both = (a_s > 0) & (a_o > 0)
         t_zeno = 2 * v / (1 - eta**2 + tiny) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
         zeno = hit_impact & both & ((t_zeno * p <= integ.zeno_time) | (v <= integ.zeno_velocity * p * alpha))
 
         rec = c.rec.saw_peak(is_rocking & (hit_apex | (not summary_only)) & ~back_to_rest, thf).saw_overturn(hit_over, tf)
         theta_new = jnp.where(hit_impact | back_to_rest, 0.0, thf)
-        omega_new = jnp.where(hit_impact, jnp.where(zeno, 0.0, omega_imp), jnp.where(hit_apex | back_to_rest, 0.0, omf))
+        theta_dot_new = jnp.where(hit_impact, jnp.where(zeno, 0.0, theta_dot_impact), jnp.where(hit_apex | back_to_rest, 0.0, theta_dot_f))
         side_new = jnp.where(hit_impact, side_imp, c.side)
         mode = jnp.where(hit_over, _OVERTURNED, jnp.where(zeno | back_to_rest, _REST, c.mode))
         t_new = jnp.where(back_to_rest, c.t + self._min_step(sc, c.t), tf)
@@ -332,15 +332,15 @@ class RigidStepper(AbstractStepper):
         seg_done = is_rocking & no_event & ~chunked & (tf >= t_seg)
         # A summary segment that reaches the end of the excitation goes on exactly when its free
         # motion overturns (the same test `segment_end` makes at the start of the next segment).
-        free_overturns = summary_only & (c.t < t_end) & (tf >= t_end) & (model.free_peak(thf, omf, c.side) >= thr)
+        free_overturns = summary_only & (c.t < t_end) & (tf >= t_end) & (model.free_peak(thf, theta_dot_f, c.side) >= threshold)
         finished = c.finished | hit_over | bad | (seg_done & ~free_overturns & ~back_to_rest)
         out = eqx.tree_at(
-            lambda x: (x.t, x.theta, x.omega, x.side, x.mode, x.rec, x.n_impacts, x.dt_next, x.status, x.finished, x.hist),
+            lambda x: (x.t, x.theta, x.theta_dot, x.side, x.mode, x.rec, x.n_impacts, x.dt_next, x.status, x.finished, x.hist),
             c,
             (
                 jnp.where(is_rocking, t_new, c.t),
                 jnp.where(is_rocking, theta_new, c.theta),
-                jnp.where(is_rocking, omega_new, c.omega),
+                jnp.where(is_rocking, theta_dot_new, c.theta_dot),
                 jnp.where(is_rocking, side_new, c.side),
                 jnp.where(is_rocking, mode, c.mode),
                 rec,
@@ -356,16 +356,16 @@ class RigidStepper(AbstractStepper):
 
     def _diffrax_parts(self, sc: _Scene, exc: AbstractExcitation):
         """The rocking equation's term, its three events and the step-size controller."""
-        model, integ, thr, alpha = self.model, self.integrator, sc.thr, sc.alpha
+        model, integ, threshold, alpha = self.model, self.integrator, sc.threshold, sc.alpha
 
         def vf(t, y, args):
-            theta, omega = y
-            return omega, model.acceleration(t, theta, args, exc)
+            theta, theta_dot = y
+            return theta_dot, model.acceleration(t, theta, args, exc)
 
         term = diffrax.ODETerm(vf)
         cond_impact = lambda t, y, args, **kw: args * y[0]
         cond_apex = lambda t, y, args, **kw: args * y[1]
-        cond_over = lambda t, y, args, **kw: args * y[0] - thr * alpha
+        cond_over = lambda t, y, args, **kw: args * y[0] - threshold * alpha
         event = diffrax.Event(
             # diffrax gives priority by list position when several events fire in one step. Order
             # them as they can occur in time within one flight: crossing the overturning angle comes
@@ -386,6 +386,6 @@ def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, 
     if summary_only:
         # Free motion after the excitation: the next peak is the last one that matters.
         still = (c.mode == _ROCKING) & (status == Status.ok)
-        rec = rec.saw_peak(still, model.free_rotation(c.theta, c.omega, c.side))
+        rec = rec.saw_peak(still, model.free_rotation(c.theta, c.theta_dot, c.side))
     return model.watch().solution(rec, status, n_impacts=c.n_impacts, ts=None if summary_only else save.ts,
                                   history=c.hist, n_iterations=c.n_segments)

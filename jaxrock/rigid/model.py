@@ -20,30 +20,33 @@ class RigidModel(AbstractModel):
     """Housner's rigid rocking block (eq. 2), or a rigid column on an extended rigid base (eq. 22).
 
     - `block`: the geometry (`Block`); the rocking quantities α′, p′, η′ are taken from it.
-    - `eta`: angular-velocity factor across an impact; None → the block's η′ (eq. 3); 1 → undamped.
-    - `threshold`: overturned when |θ| ≥ threshold·α′ (default 1).
+    - `eta`: the angular-velocity ratio η across an impact (r = η², eq. 3); None → the block's η′
+      (eq. 3, resolved here: the field is always an array); 1 → undamped.
+    - `threshold`: overturned when |θ| ≥ threshold·α′ (default 1; an array).
+
+    The block's parameters resolved here (η′) depend on its slenderness only: a model whose
+    block is replaced by one of another size (`record_overturning_scale`) stays correct.
     """
 
     block: Block
-    eta: Float[Array, ""] | None = None
-    threshold: Float[Array, ""] = 1.0
+    eta: Float[Array, ""]
+    threshold: Float[Array, ""]
 
-    def __check_init__(self):
-        if not isinstance(self.block, Block):
-            raise JaxrockInputError(f"block must be a jaxrock.Block, got {type(self.block).__name__}")
+    def __init__(self, block: Block, eta=None, threshold=1.0):
+        if not isinstance(block, Block):
+            raise JaxrockInputError(f"block must be a jaxrock.Block, got {type(block).__name__}")
+        self.block = block
+        self.eta = block.eta_r if eta is None else jnp.asarray(eta, dtype=float)
+        self.threshold = jnp.asarray(threshold, dtype=float)
         check_limits(self.limits())
 
     def limits(self) -> tuple[Limit, ...]:
-        eta = () if self.eta is None else (Limit("eta (impact velocity ratio)", self.eta, 0.0, 1.0),)
-        return (*eta, Limit("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True))
-
-    @property
-    def restitution(self):
-        return self.block.eta_r if self.eta is None else jnp.asarray(self.eta, dtype=float)
+        return (Limit("eta (impact velocity ratio)", self.eta, 0.0, 1.0),
+                Limit("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True))
 
     @property
     def history_fields(self):
-        return ("theta", "omega")
+        return ("theta", "theta_dot")
 
     def default_integrator(self) -> EventIntegrator:
         return EventIntegrator()
@@ -54,26 +57,26 @@ class RigidModel(AbstractModel):
         phi = side * a - theta
         return -(p**2) * (jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
 
-    def _free(self, theta, omega, side):
+    def _free(self, theta, theta_dot, side):
         """(overturns, next peak |θ| [rad]) of free rocking from (θ, θ̇) on `side` (`jaxrock.rigid.event_integrator`)."""
-        a, p, eta = self.block.alpha_r, self.block.p_r, self.restitution
-        energy = 0.5 * omega**2 + p**2 * (jnp.cos(a - jnp.abs(theta)) - jnp.cos(a))
-        energy = jnp.where(side * omega < 0, eta**2 * energy, energy)
+        a, p, eta = self.block.alpha_r, self.block.p_r, self.eta
+        energy = 0.5 * theta_dot**2 + p**2 * (jnp.cos(a - jnp.abs(theta)) - jnp.cos(a))
+        energy = jnp.where(side * theta_dot < 0, eta**2 * energy, energy)
         c = jnp.cos(a) + energy / p**2
         over = c >= jnp.cos((1 - self.threshold) * a)
         # double where: the masked branch must not see c ≥ 1, where arccos′ = −∞ and its zero
         # cotangent would become 0·∞ = NaN under `grad`; cos α is a safe stand-in (peak 0)
         return over, a - jnp.arccos(jnp.where(over, jnp.cos(a), jnp.maximum(c, -1.0)))
 
-    def free_peak(self, theta, omega, side):
+    def free_peak(self, theta, theta_dot, side):
         """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side` (`jaxrock.rigid.event_integrator`):
         the threshold if it overturns."""
-        over, peak = self._free(theta, omega, side)
+        over, peak = self._free(theta, theta_dot, side)
         return jnp.where(over, self.threshold, peak / self.block.alpha_r)
 
-    def free_rotation(self, theta, omega, side):
+    def free_rotation(self, theta, theta_dot, side):
         """The same next peak as a rotation |θ| [rad] (threshold·α′ if it overturns)."""
-        over, peak = self._free(theta, omega, side)
+        over, peak = self._free(theta, theta_dot, side)
         return jnp.where(over, self.threshold * self.block.alpha_r, peak)
 
     def watch(self, system=None) -> Watch:
@@ -89,9 +92,8 @@ class RigidModel(AbstractModel):
 
 
 def _scenes_file_model(block: Block, eta=None) -> RigidModel:
-    """A scenes file's rigid model: η always an array (the block's η′ by default), so that rows
-    with and without `eta` share one batch."""
-    return RigidModel(block, eta=block.eta_r if eta is None else jnp.asarray(eta, dtype=float))
+    """A scenes file's rigid model (the block's η′ by default)."""
+    return RigidModel(block, eta=eta)
 
 
 register_model_kind("rigid", _scenes_file_model, ("eta",), "Housner's rigid block (RM)")

@@ -165,7 +165,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
         n_ts = 0 if save_ts is None else save_ts.shape[0]
 
         am, af, gamma, beta = ig.coefficients
-        K = ig.levels
+        n_levels = ig.levels
         N = mech.ndof
         dtype = jnp.result_type(float)
         M = mech.mass_matrix()
@@ -178,11 +178,11 @@ class GeneralizedAlphaStepper(AbstractStepper):
         t_end = jnp.asarray(excitation.t_end, dtype)
         t_free = 2 * jnp.pi / mech.p_r / 16
         dt_exc = jnp.where(jnp.isfinite(excitation.max_step), excitation.max_step, t_free)
-        j_exc = jnp.clip(jnp.floor(jnp.log2(t_free / dt_exc)), 0, K // 2).astype(jnp.int32)
+        j_exc = jnp.clip(jnp.floor(jnp.log2(t_free / dt_exc)), 0, n_levels // 2).astype(jnp.int32)
         dt_top = dt_exc * 2.0**j_exc
-        ks = jnp.arange(K)
+        ks = jnp.arange(n_levels)
         dts = dt_top * 2.0 ** (-ks.astype(dtype))
-        stride = (2 ** (K - 1 - ks)).astype(jnp.int64 if dtype == jnp.float64 else jnp.int32)
+        stride = (2 ** (n_levels - 1 - ks)).astype(jnp.int64 if dtype == jnp.float64 else jnp.int32)
         dt_min = dts[-1]
 
         scale = mech.atol_scale()[:N]
@@ -210,7 +210,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                     Kb = Kb * free[:, None] * free[None, :] + jnp.diag(1.0 - free)
                 return Kb
 
-            Kinv = _linalg.inv(jax.vmap(k_eff)(dts))  # (K, N, N)
+            Kinv = _linalg.inv(jax.vmap(k_eff)(dts))  # (n_levels, N, N)
             y_init = mech.initial_state()  # [q, v] (+ [dissipated, input] when tracked)
             q0, v0 = y_init[:N], y_init[N : 2 * N]
             f0_rest, f0_ext, f0_damp = mech.forces_without_spring(t0, q0, v0, excitation)
@@ -223,7 +223,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 vals0 = mech.history(t0, y_init, excitation, fields)
                 at0 = save_ts <= t0
                 hist0 = {f: jnp.where(at0, vals0[f], jnp.nan) for f in fields}
-            k_start = jnp.minimum(j_exc + 1, K - 1)
+            k_start = jnp.minimum(j_exc + 1, n_levels - 1)
             carry = dict(
                 n=jnp.zeros((), stride.dtype), k=k_start, t=t0, q=q0, v=v0, a=a0, f=f0_tot,
                 ew=jnp.zeros(2, dtype),  # [dissipated, input] work
@@ -292,7 +292,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 # the ladder's bottom it no longer rejects (the band is resolved as far as it goes)
                 th0, th1 = q[0], q1[0]
                 through = (th0 * th1 <= 0) | (jnp.minimum(jnp.abs(th0), jnp.abs(th1)) < theta_band)
-                through = through & (k < K - 1)
+                through = through & (k < n_levels - 1)
                 excess = jnp.where(through, jnp.abs(th1 - th0) / (ig.crossing * theta_s), 0.0)
                 err = jnp.maximum(err, excess**3)
             err = jnp.where(conv & jnp.isfinite(err), err, jnp.inf)
@@ -310,8 +310,8 @@ class GeneralizedAlphaStepper(AbstractStepper):
             k_floor = jnp.where(s["t1"] < t_end, j_exc, 0)
             k_up = jnp.where(grow & aligned & (k - 1 >= k_floor), k - 1, k)
             shrink = jnp.ceil(jnp.log2(jnp.maximum(s["err"], 1.0)) / 3.0 + 0.2).astype(jnp.int32)
-            k_dn = jnp.minimum(k + jnp.where(jnp.isfinite(s["err"]), jnp.maximum(shrink, 1), 2), K - 1)
-            failed = (~ok) & (k == K - 1)
+            k_dn = jnp.minimum(k + jnp.where(jnp.isfinite(s["err"]), jnp.maximum(shrink, 1), 2), n_levels - 1)
+            failed = (~ok) & (k == n_levels - 1)
             k_new = jnp.where(ok, k_up, k_dn)
 
             # accepted-step bookkeeping

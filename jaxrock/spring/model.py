@@ -36,17 +36,16 @@ class SpringModel(AbstractModel):
     - `block`: geometry (`Block`, with `b_base > b` for an extended rigid base, section 5);
     - `column`: `Column` (E, ρ, optional A, I) or None for the one-DOF quasi-rigid SM;
     - `added_masses` (static): add ΔI = I′o − (4/3) m h² (SPEC; paper section 3.3);
-    - `cbar`: damper coefficient c̄ (default eq. 17 with α′);
+    - `cbar`: damper coefficient c̄ (None: eq. 17 with α′, resolved at construction: always an array);
     - `backbone` (static): the spring's moment–rotation curve, `jaxrock.Bilinear` or
       `Tanh` (or their names; default `DEFAULT_BACKBONE`);
     - `smoothing`: θs/α′, the backbone's pre-yield rotation (the bilinear yield rotation θy, or
       the tanh's θs; default `DEFAULT_SMOOTHING`);
     - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
       at the first fixed-base period of the discretised column *with its added rotational masses*
-      (`first_period`; they lengthen it: 2h = 50 m, 2b = 5 m concrete, 10 elements: T₁ = 0.901 s,
-      0.896 s without them, eq. 21 0.893 s);
+      (`first_period`; they lengthen it a little, `tests/test_spring.py`);
     - `n_elements` (static), `fixed_base` (static: base rotation clamped, section 6);
-    - `threshold`: overturned when |θ| ≥ threshold·α′.
+    - `threshold`: overturned when |θ| ≥ threshold·α′ (an array).
     """
 
     block: Block
@@ -54,7 +53,7 @@ class SpringModel(AbstractModel):
     cbar: Float[Array, ""]
     smoothing: Float[Array, ""]
     zeta: Float[Array, ""]
-    threshold: float
+    threshold: Float[Array, ""]
     backbone: AbstractBackbone = eqx.field(static=True)
     added_masses: bool = eqx.field(static=True)
     n_elements: int = eqx.field(static=True)
@@ -89,7 +88,7 @@ class SpringModel(AbstractModel):
         self.zeta = jnp.asarray(zeta, dtype=float)
         self.n_elements = n_elements
         self.fixed_base = bool(fixed_base)
-        self.threshold = threshold
+        self.threshold = jnp.asarray(threshold, dtype=float)
         check_limits(self.limits())
 
     def limits(self) -> tuple[Limit, ...]:
@@ -101,27 +100,15 @@ class SpringModel(AbstractModel):
 
     # -- AbstractModel --------------------------------------------------------------------------
     def default_integrator(self) -> "SpringIntegrator | GeneralizedAlpha":
-        """Work–precision choice (measured on 2 CPU cores, vmapped grids, `benchmarks/bench_spring.py`,
-        with the default tanh backbone at θs = 1e-4 α; with the bilinear θy = 1e-5 α, over the 240
-        scenes of `benchmarks/bench_backbone.py`: quasi-rigid Tsit5 5.2 ms/scene; flexible
-        generalized-α 1e-5 10 ms/scene, its total error against the sharp limit 3.1e-3 max, 4e-5
-        median).
+        """The work–precision choice (`benchmarks/bench_spring.py`; its measured errors and costs,
+        and the alternatives, are in the README, "Numerics and performance"):
 
-        Quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10 (32×32 pulse grid, tanα = 0.2: max error
-        of max|θ|/α 2.4e-8 against Tsit5 at 1e-11, ~1.5–1.9 ms/scene; reverse-mode differentiable,
-        which the calibration of c̄ needs). `GeneralizedAlpha(1e-6, 1e-6)` runs the same grid at
-        0.092 ms/scene with max error 8e-3 (median 1e-4; OpenSeesPy: 19 ms, 1.4e-2): pass it for
-        pulse spectra where that suffices — not for records, whose response hangs on resolving the
-        block's ringing on the stiff pre-yield spring before uplift (README).
-
-        Flexible → `GeneralizedAlpha(1e-5, 1e-5)`, ρ∞ = 0.9 (8×8 grid of 2h = 50 m concrete
-        columns, 10 elements, error against generalized-α at 1e-9, itself 4e-7 from Kvaerno5 at
-        1e-7): 4.2 ms/scene, max error 2.9e-4 (median 4e-5); at 1e-4: 2.8 ms, 2.1e-3; at 1e-6:
-        7.8 ms, 1.5e-4 (OpenSeesPy at T/400: 157 ms, 6.9e-3). ρ∞ = 1 (the trapezoidal rule)
-        leaves the spring's impacts ringing in the stiff axial modes: 30–100× more steps; ρ∞ =
-        0.8, 0.7, 0.5 cost 5–30 % more than 0.9 at equal error. diffrax's Kvaerno5 + Newton at 1e-6
-        (`SpringIntegrator()`) costs ~1.6 s/scene: use it for reverse-mode gradients of a
-        flexible column."""
+        - quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10, reverse-mode differentiable (which
+          the calibration of c̄ needs). `GeneralizedAlpha(1e-6, 1e-6)` is far cheaper at ~1e-2
+          error in θ/α: for pulse spectra where that suffices, not for records, whose response
+          hangs on resolving the block's ringing on the stiff pre-yield spring before uplift;
+        - flexible → `GeneralizedAlpha(1e-5, 1e-5)`, ρ∞ = 0.9 (forward-mode differentiable; for
+          `jax.grad` through a flexible column, `SpringIntegrator()`, Kvaerno5 + Newton)."""
         if self.column is None:
             return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5")
         return GeneralizedAlpha(rtol=1e-5, atol=1e-5)
@@ -196,9 +183,9 @@ class SpringModel(AbstractModel):
         inside loops prefer `self.system().vector_field` or `SpringIntegrator.solve`."""
         return self.system().vector_field(t, y, excitation)
 
-    def initial_state(self, theta0=0.0, omega0=0.0):
+    def initial_state(self, theta0=0.0, theta_dot0=0.0):
         """y at rest (gravity-preloaded column) rotated rigidly by θ0 with angular velocity ω0."""
-        return self.system().initial_state(theta0, omega0)
+        return self.system().initial_state(theta0, theta_dot0)
 
     def base_rotation(self, y):
         return y[0]

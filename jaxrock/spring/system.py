@@ -16,7 +16,7 @@ from .base_spring import AbstractBackbone, damper
 
 HISTORY_FIELDS = (
     "theta",
-    "omega",
+    "theta_dot",
     "u_top",
     "w_top",
     "base_moment",
@@ -226,12 +226,12 @@ class SpringSystem(eqx.Module):
             parts.append(jnp.stack([v @ f_damp, v @ f_ext]))
         return jnp.concatenate(parts)
 
-    def initial_state(self, theta0=0.0, omega0=0.0):
+    def initial_state(self, theta0=0.0, theta_dot0=0.0):
         theta0 = jnp.asarray(theta0, dtype=float)
-        omega0 = jnp.asarray(omega0, dtype=float)
+        theta_dot0 = jnp.asarray(theta_dot0, dtype=float)
         if self.n is None:
             q = jnp.atleast_1d(theta0)
-            v = jnp.atleast_1d(omega0)
+            v = jnp.atleast_1d(theta_dot0)
         else:
             x, y, phi = beam.positions(self.q_eq, self.h, self.n)
             c, s = jnp.cos(theta0), jnp.sin(theta0)
@@ -239,7 +239,7 @@ class SpringSystem(eqx.Module):
             xr, yr = x * c + y * s, -x * s + y * c
             q = beam.from_positions(xr, yr, phi + theta0, self.h, self.n)
             # rigid angular velocity ω0: ẋ = ω0 y, ẏ = −ω0 x, φ̇ = ω0
-            v = beam.from_positions(omega0 * yr, -omega0 * xr + beam.node_heights(self.h, self.n), jnp.full_like(phi, omega0), self.h, self.n)
+            v = beam.from_positions(theta_dot0 * yr, -theta_dot0 * xr + beam.node_heights(self.h, self.n), jnp.full_like(phi, theta_dot0), self.h, self.n)
         y0 = [q, v]
         if self.track_energy:
             y0.append(jnp.zeros(2))
@@ -268,13 +268,13 @@ class SpringSystem(eqx.Module):
 
     def history(self, t, y, excitation, fields):
         q, v = self.split(y)
-        theta, omega = q[0], v[0]
+        theta, theta_dot = q[0], v[0]
         out = {}
         for name in fields:
             if name == "theta":
                 out[name] = theta
-            elif name == "omega":
-                out[name] = omega
+            elif name == "theta_dot":
+                out[name] = theta_dot
             elif name == "u_top":
                 out[name] = 2 * self.h * jnp.sin(theta) if self.n is None else beam.top_displacement(q, self.h, self.n)
             elif name == "w_top":

@@ -1,0 +1,179 @@
+"""The batch of scenes: reading a scenes file column by column (vectorised) builds, row for row,
+the scene each row describes on its own (the same model and excitation as `scene_model` and the
+pulse constructors, defaults filled in the same way), a bad cell anywhere is named by its row and
+column, and `jaxrock batch` writes, row for row, what `simulate` gives, and resumes."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrock as jr
+from helpers import invoke, read_csv, write
+from jaxrock import JaxrockInputError
+from jaxrock.io.scenes_file import read_scenes, scene_model
+from jaxrock.scene import PULSES
+
+ROWS = """id,height,tan_alpha,width,tan_alpha_base,model,pulse,a_p,accel_ratio,omega_p,omega_ratio,scale,eta,cbar,E,rho,zeta
+a,10,0.2,,,rigid,symmetric,,3,,2,,,,,,
+b,4,,1.2,0.4,rigid,antisymmetric,5.5,,7,,,0.8,,,,
+c,25,0.15,,,spring,symmetric,,2.5,,4,,,0.03,,,
+d,50,0.1,,0.12,spring-flexible,antisymmetric,,1.5,3,,,,,2e10,2400,0.02
+e,10,0.25,,,spring-flexible,symmetric,-4,,,6,,,,,,
+f,8,0.3,,,rigid,rec.txt,,,,,2.5,,,,,
+g,12,0.2,,,rigid,rec.txt,,,,,,0.9,,,,
+"""
+
+
+def _expected(values: dict, base):
+    """The scene of one row, built alone with the public constructors."""
+    num = lambda k: float(values[k]) if values.get(k, "") != "" else None  # noqa: E731
+    h = num("height")
+    tan_a = num("tan_alpha") if num("tan_alpha") is not None else num("width") / h
+    block = jr.Block.from_slenderness(h, tan_a, num("tan_alpha_base"))
+    model = scene_model(values["model"], block, eta=num("eta"), cbar=num("cbar"), E=num("E"), rho=num("rho"), zeta=num("zeta"))
+    if values["pulse"] in PULSES:
+        a = num("a_p") if num("a_p") is not None else num("accel_ratio") * float(block.uplift_acceleration)
+        w = num("omega_p") if num("omega_p") is not None else num("omega_ratio") * float(block.p_r)
+        return model, PULSES[values["pulse"]](a, w)
+    return model, jr.read_record(base / values["pulse"]).scaled(num("scale") or 1.0)
+
+
+def test_vectorised_reading_builds_each_row_as_built_alone(tmp_path):
+    (tmp_path / "rec.txt").write_text("0 0.1\n0.01 0.3\n0.02 -0.2\n0.03 0.05\n")
+    (tmp_path / "s.csv").write_text(ROWS)
+    scenes = read_scenes(tmp_path / "s.csv")
+    assert len(scenes) == 7 and sorted(len(i) for i in scenes.groups.values()) == [1, 1, 1, 1, 1, 2]
+    for (kind, exc), idx in scenes.groups.items():
+        models, excs = scenes.model(kind, idx), scenes.excitation(exc, idx)
+        for lane, i in enumerate(idx):
+            want_m, want_e = _expected(scenes.values[i], tmp_path)
+            for got, want in ((models, want_m), (excs, want_e)):
+                import jax
+
+                got_leaves = jax.tree_util.tree_leaves(jax.tree_util.tree_map(lambda x: x[lane], got))
+                want_leaves = jax.tree_util.tree_leaves(want)
+                assert len(got_leaves) == len(want_leaves)
+                for g, w in zip(got_leaves, want_leaves):
+                    np.testing.assert_allclose(np.asarray(g), np.asarray(w), rtol=1e-14, atol=0, err_msg=scenes.values[i]["id"])
+
+
+@pytest.mark.parametrize(
+    "cell, value, needle",
+    [
+        ("tan_alpha", "abc", "row 5 (line 6), column 'tan_alpha': 'abc' is not a number"),
+        ("tan_alpha", "0.0001", "row 5 (line 6), column 'tan_alpha': tan_alpha = 0.0001 is outside the valid range [0.001, 1)"),
+        ("omega_ratio", "-2", "row 5 (line 6), column 'omega_ratio': omega_ratio = -2 is outside"),
+        ("E", "1e3", "row 5 (line 6): E (Young's modulus) [Pa] = 1000 is outside the valid range [1e+06, 1e+15]"),
+        ("a_p", "0", "row 5 (line 6), column 'a_p': a_p = 0; valid: any non-zero value"),
+    ],
+)
+def test_a_bad_cell_in_a_long_file_is_named_by_row_and_column(tmp_path, cell, value, needle):
+    header = "height,tan_alpha,model,a_p,omega_ratio,E"
+    rows = [f"10,0.2,spring-flexible,3,2,3e10"] * 8
+    cols = header.split(",")
+    bad = rows[4].split(",")
+    bad[cols.index(cell)] = value
+    rows[4] = ",".join(bad)
+    (tmp_path / "s.csv").write_text("\n".join([header, *rows]) + "\n")
+    with pytest.raises(JaxrockInputError, match=needle.replace("(", r"\(").replace(")", r"\)").replace("[", r"\[").replace("+", r"\+")):
+        read_scenes(tmp_path / "s.csv")
+
+
+# -- running a scenes file through the command line ---------------------------------------------
+_jit_sim = eqx.filter_jit(jr.simulate)  # the run of one row, by hand
+SCENES = """id,height,tan_alpha,width,pulse,accel_ratio,a_p,omega_ratio,omega_p,eta
+a,10,0.2,,symmetric,4,,,6.283185307179586,
+b,5,0.15,,symmetric,3,,2,,0.9
+# a comment line
+c,20,,2,symmetric,,5,3,,1
+"""
+
+
+def _direct(row):
+    """The scene of one row, built by hand, run by `simulate`."""
+    h = float(row["height"])
+    ta = float(row["tan_alpha"]) if row["tan_alpha"] else float(row["width"]) / h
+    block = jr.Block.from_slenderness(h, ta)
+    a_p = float(row["a_p"]) if row["a_p"] else float(row["accel_ratio"]) * 9.81 * ta
+    w = float(row["omega_p"]) if row["omega_p"] else float(row["omega_ratio"]) * float(block.p)
+    eta = float(row["eta"]) if row["eta"] else float(block.eta)
+    model = jr.RigidModel(block, eta=jnp.asarray(eta))
+    return _jit_sim(model, jr.RickerPulse(a_p, w))
+
+
+def test_batch_round_trip_and_resume(tmp_path):
+    scenes = write(tmp_path / "scenes.csv", SCENES)
+    (tmp_path / "out").mkdir()
+    r = invoke("batch", scenes, tmp_path / "out", "--quiet")  # a folder: the results go inside it
+    assert r.exit_code == 0, r.output
+    res = tmp_path / "out" / "scenes_results.csv"
+    rows = read_csv(res)
+    assert [x["row"] for x in rows] == ["1", "2", "3"]
+    assert [x["id"] for x in rows] == ["a", "b", "c"]
+    for x in rows:
+        sol = _direct(x)
+        assert float(x["max_theta"]) == pytest.approx(float(sol.max_theta), abs=1e-9)
+        assert int(x["overturned"]) == int(sol.overturned)
+        assert float(x["t_overturn"]) == pytest.approx(float(sol.t_overturn), abs=1e-9) if sol.overturned else x["t_overturn"] == "inf"
+        assert int(x["uplifted"]) == int(sol.uplifted)
+        assert int(x["n_impacts"]) == int(sol.n_impacts)
+        assert x["status"] == "ok"
+
+    # an interrupted run: only row 2 finished (its result marked to show it is kept, not rerun)
+    with open(res) as fh:
+        lines = fh.read().splitlines()
+    kept = lines[2].split(",")
+    kept[-7] = "0.123456"  # max_theta
+    write(res, lines[0] + "\n" + ",".join(kept) + "\n" + "1,a,10")  # + a partly written line
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 0, r.output
+    assert "1 skipped" in r.output and "2 run" in r.output
+    again = read_csv(res)
+    assert [x["row"] for x in again] == ["1", "2", "3"]
+    assert again[1]["max_theta"] == "0.123456"
+    for a, b in ((again[0], rows[0]), (again[2], rows[2])):
+        # rerun in other batches: equal to the root-finding tolerance, not bitwise
+        assert {k: v for k, v in a.items() if k not in ("max_theta", "t_overturn", "t_uplift")} == {
+            k: v for k, v in b.items() if k not in ("max_theta", "t_overturn", "t_uplift")
+        }
+        for k in ("max_theta", "t_overturn", "t_uplift"):
+            assert float(a[k]) == pytest.approx(float(b[k]), abs=1e-9)
+
+    # resuming against changed inputs is refused
+    write(scenes, SCENES.replace("b,5,0.15", "b,6,0.15"))
+    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    assert r.exit_code == 2 and "row 2" in r.output
+
+
+@pytest.mark.parametrize(
+    "bad, where",
+    [
+        ("b,5,1.5,,symmetric,3,,2,,", ["row 2", "line 3", "'tan_alpha'", "[0.001, 1)"]),
+        ("b,-5,0.1,,symmetric,3,,2,,", ["row 2", "'height'", "(0, inf)"]),
+        ("b,5,0.1,,symmetric,3,,abc,,", ["row 2", "'omega_ratio'", "not a number"]),
+        ("b,5,0.1,,triangle,3,,2,,", ["row 2", "'pulse'", "symmetric"]),
+        ("b,5,0.1,,symmetric,,,2,,", ["row 2", "'a_p'", "accel_ratio"]),
+        ("b,5,0.1,0.5,symmetric,3,,2,,", ["row 2", "'tan_alpha'", "width"]),
+        ("b,5,0.1,,symmetric,3,,2,,1.5", ["row 2", "'eta'", "[0, 1]"]),
+    ],
+)
+def test_batch_malformed_row_fails_before_running(tmp_path, bad, where):
+    lines = SCENES.splitlines()
+    lines[2] = bad
+    scenes = write(tmp_path / "scenes.csv", "\n".join(lines) + "\n")
+    res = tmp_path / "results.csv"
+    r = invoke("batch", scenes, res, "--quiet")
+    assert r.exit_code == 2, r.output
+    for w in where:
+        assert w in r.output, (w, r.output)
+    assert "Traceback" not in r.output
+    assert not res.exists()  # nothing ran
+
+
+def test_batch_parameter_for_wrong_model(tmp_path):
+    scenes = write(tmp_path / "s.csv", "height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,spring,3,2,0.5\n")
+    r = invoke("batch", scenes, tmp_path / "r.csv")
+    assert r.exit_code == 2 and "'eta'" in r.output and "rigid" in r.output
