@@ -66,8 +66,6 @@ SCRIPT = textwrap.dedent("""
     from jaxrock.cli import app
     out = sys.argv[1]
     block = jr.Block.from_slenderness(10.0, 0.2)
-    sol = jr.simulate(jr.RigidModel(block), jr.RickerPulse(*jr.pulse_of_ratios(block, 3.0, 4.0)))
-    assert not bool(sol.overturned) and abs(float(sol.peak_rad) - float(sol.max_theta) * float(block.alpha_r)) < 1e-12, sol
     spec = jr.overturning_spectrum(jr.RigidModel(block), [2.0, 4.0], [1.5, 3.0], progress=False)
     still = ~spec.overturned
     assert still.any() and np.allclose(spec.peak_rad[still], spec.max_theta[still] * float(block.alpha_r)), spec.peak_rad
@@ -80,8 +78,6 @@ SCRIPT = textwrap.dedent("""
     assert all(float(r["peak_rad"]) > 0 for r in rows), rows
     r = CliRunner().invoke(app, ["simulate", "--accel-ratio", "3", "--omega-ratio", "4"])
     assert r.exit_code == 0 and "peak |θ| [rad] = " in r.output, r.output
-    r = CliRunner().invoke(app, ["spectrum", "--n-omega", "2", "--n-accel", "2", "--refine", "0", "-q", "--out", out + "/cli"])
-    assert r.exit_code == 0 and "peak |θ| [rad]: " in r.output, r.output
     print("new output everywhere")
 """)
 
