@@ -15,12 +15,9 @@ paper's missing eq. 13). The paper fitted c̄ by hand ("based on the data in Fig
 - `jaxrock.reports.calibration_report(out_dir)` runs these and writes the table (CSV), figure 7
   and the calibration plot (PNG); what the CLI command ``jaxrock calibrate`` prints.
 
-Findings (default quasi-rigid SM with added masses, θs = 10⁻⁴ α, angles 0.5, 0.6, …, 0.9, 0.95):
-the calibrated c̄ is 0.0203, 0.0881, 0.2192 at tanα = 0.1, 0.2, 0.3 against eq. 17's 0.0199,
-0.0779, 0.1699 (+2 %, +13 %, +29 %); the power-law fit over tanα ∈ [0.05, 0.35] gives
-k = 0.0208 ± 0.0004, n = 2.18 ± 0.02 rather than 0.02, 2. r_eq² depends on θ₀/α
-(by 0.016 at tanα = 0.1 up to 0.06 at tanα = 0.3 between θ₀/α = 0.5 and 0.95), so no single c̄ matches the
-target at every angle; the residual reported is the RMS over the angles. See `jaxrock.reports.calibration_report`.
+r_eq² depends on θ₀/α, so no single c̄ matches the target at every angle; the residual reported
+is the RMS over the angles. What the calibration finds against eq. 17 is in the README
+("Reproducing the paper"), as `jaxrock calibrate` measures it.
 """
 
 from __future__ import annotations
