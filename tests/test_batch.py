@@ -6,6 +6,7 @@ column, and `jaxrock batch` writes, row for row, what `simulate` gives, and resu
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -51,8 +52,6 @@ def test_vectorised_reading_builds_each_row_as_built_alone(tmp_path):
         for lane, i in enumerate(idx):
             want_m, want_e = _expected(scenes.values[i], tmp_path)
             for got, want in ((models, want_m), (excs, want_e)):
-                import jax
-
                 got_leaves = jax.tree_util.tree_leaves(jax.tree_util.tree_map(lambda x: x[lane], got))
                 want_leaves = jax.tree_util.tree_leaves(want)
                 assert len(got_leaves) == len(want_leaves)
@@ -72,7 +71,7 @@ def test_vectorised_reading_builds_each_row_as_built_alone(tmp_path):
 )
 def test_a_bad_cell_in_a_long_file_is_named_by_row_and_column(tmp_path, cell, value, needle):
     header = "height,tan_alpha,model,a_p,omega_ratio,E"
-    rows = [f"10,0.2,spring-flexible,3,2,3e10"] * 8
+    rows = ["10,0.2,spring-flexible,3,2,3e10"] * 8
     cols = header.split(",")
     bad = rows[4].split(",")
     bad[cols.index(cell)] = value
@@ -177,3 +176,24 @@ def test_batch_parameter_for_wrong_model(tmp_path):
     scenes = write(tmp_path / "s.csv", "height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,spring,3,2,0.5\n")
     r = invoke("batch", scenes, tmp_path / "r.csv")
     assert r.exit_code == 2 and "'eta'" in r.output and "rigid" in r.output
+
+
+# -- one structure per model kind ------------------------------------------------------------------
+@pytest.mark.parametrize("kind", ["rigid", "spring"])
+def test_defaults_are_resolved_at_construction_so_any_rows_stack(kind):
+    """η′ (rigid) and c̄ of eq. 17 (spring) are resolved when the model is built and the threshold
+    is an array: a model with its defaults and one with every parameter given have one pytree
+    structure (so rows with and without `eta` or `cbar` share a batch), and the default is the
+    closed form's value."""
+    blk = jr.Block.from_slenderness(10.0, 0.2, 0.25)
+    if kind == "rigid":
+        plain, given = jr.RigidModel(blk), jr.RigidModel(blk, eta=0.9, threshold=0.8)
+        default, expected = plain.eta, blk.eta_r
+    else:
+        plain, given = jr.SpringModel(blk), jr.SpringModel(blk, cbar=0.05, threshold=0.8)
+        default, expected = plain.cbar, jr.cbar_eq17(blk.alpha_r)
+    assert jax.tree_util.tree_structure(plain) == jax.tree_util.tree_structure(given)
+    assert all(isinstance(leaf, jax.Array) for leaf in jax.tree_util.tree_leaves(plain))
+    assert float(default) == float(expected) and float(plain.threshold) == 1.0
+    stacked = jax.tree_util.tree_map(lambda a, b: jnp.stack([a, b]), plain, given)
+    np.testing.assert_array_equal(np.asarray(stacked.threshold), [1.0, 0.8])
