@@ -9,6 +9,10 @@ calibration, scenes files) → input/output (`io`) → models with their integra
 Simulations run in float64: importing jaxrock sets `jax_enable_x64`. There is no float32 mode
 (it ended the default scene in `max_steps` with θ/α = 0, and 33 of 4096 cells of a spectrum
 failed); the variable `JAXROCK_X64` that once chose it is refused unless it is 1.
+
+Importing jaxrock also turns on JAX's persistent compilation cache in the user's cache folder
+(`jaxrock.cache`: `JAXROCK_CACHE_DIR` moves it, `JAXROCK_CACHE_DIR=off` switches it off), unless
+the process has chosen a cache folder of its own.
 """
 
 import os as _os
@@ -19,6 +23,10 @@ if _os.environ.get("JAXROCK_X64", "1") != "1":
     raise ImportError(f"JAXROCK_X64 = {_os.environ['JAXROCK_X64']!r}: jaxrock runs in float64 only (its float32 mode gave wrong "
                       "answers and was removed); unset the variable")
 _jax.config.update("jax_enable_x64", True)
+
+from .cache import enable_compilation_cache as _enable_compilation_cache
+
+_enable_compilation_cache()  # JAX's persistent compilation cache, unless switched off or chosen by the process (jaxrock.cache)
 
 from ._validate import JaxrockInputError
 from .geometry import G, Block

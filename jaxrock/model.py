@@ -170,6 +170,43 @@ def diffrax_adjoint(autodiff: str, checkpoints: int | None = None) -> diffrax.Ab
     return diffrax.ForwardMode() if autodiff == "forward" else diffrax.RecursiveCheckpointAdjoint(checkpoints)
 
 
+class FirstStepController(diffrax.AbstractAdaptiveStepSizeController):
+    """An adaptive step-size controller that carries the solve's first step: pass it to
+    `diffrax.diffeqsolve` with `dt0=None`.
+
+    Given as `dt0`, a traced first step makes diffrax compile its sign check `(t1 - t0)·dt0 ≥ 0`
+    (an `equinox.error_if`) into a host callback in the middle of the loop, and JAX keeps no kernel
+    with a host callback in its persistent compilation cache (`jaxrock.cache`). jaxrock's solves
+    run forward by construction (t1 ≥ t0, dt0 > 0), so the check never fired; this controller
+    hands the same first step to the wrapped controller's `init` (the same numbers, bit for bit)
+    and leaves the check out."""
+
+    controller: diffrax.AbstractAdaptiveStepSizeController
+    dt0: Float[Array, ""]
+
+    @property
+    def rtol(self):
+        return self.controller.rtol
+
+    @property
+    def atol(self):
+        return self.controller.atol
+
+    @property
+    def norm(self):  # pyright: ignore[reportIncompatibleMethodOverride]
+        return self.controller.norm
+
+    def wrap(self, direction):
+        return FirstStepController(self.controller.wrap(direction), self.dt0 * direction)
+
+    def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
+        del dt0  # None: diffeqsolve was given no first step
+        return self.controller.init(terms, t0, t1, y0, self.dt0, args, func, error_order)
+
+    def adapt_step_size(self, *args, **kwargs):
+        return self.controller.adapt_step_size(*args, **kwargs)
+
+
 class AbstractModel(eqx.Module):
     """A rocking body model: rigid (`RigidModel`) or spring (`SpringModel`)."""
 

@@ -1,18 +1,15 @@
 import os
 import tempfile
 
-import jax
 import numpy as np
 import pytest
 
-import jaxrock  # noqa: F401  (enables float64)
-from jaxrock.analyses.spectra import Spectrum
+# The tests keep their compiled kernels apart from the user's (jaxrock.cache), shared by the workers
+# of a run and by the subprocesses the tests start (they inherit the variable).
+os.environ.setdefault("JAXROCK_CACHE_DIR", os.path.join(tempfile.gettempdir(), "jaxrock-test-cache"))
 
-# Reuse compiled XLA programs across test files of one run (and across runs on one machine).
-jax.config.update(
-    "jax_compilation_cache_dir", os.environ.get("JAXROCK_TEST_CACHE", os.path.join(tempfile.gettempdir(), "jaxrock-xla-cache"))
-)
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
+import jaxrock  # noqa: E402,F401  (enables float64 and the persistent compilation cache)
+from jaxrock.analyses.spectra import Spectrum  # noqa: E402
 
 
 @pytest.fixture(autouse=True)

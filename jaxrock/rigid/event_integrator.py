@@ -41,7 +41,7 @@ from .._rootfind import SafeNewton
 from ..bookkeeping import Record
 from ..excitation import AbstractExcitation
 from ..geometry import G
-from ..model import AbstractIntegrator, AbstractStepper, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
+from ..model import AbstractIntegrator, AbstractStepper, FirstStepController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
 
 if TYPE_CHECKING:
@@ -263,12 +263,12 @@ class RigidStepper(AbstractStepper):
             term,
             integ.solver,
             c.t,
-            t_win,
-            dt0,
+            t_win,  # ≥ c.t: the segment's end is never before it (`_segment_end`)
+            None,  # the first step (> 0) travels with the controller: no host callback (FirstStepController)
             (c.theta, c.theta_dot),
             args=c.side,
             saveat=saveat,
-            stepsize_controller=controller,
+            stepsize_controller=FirstStepController(controller, dt0),
             event=event,
             max_steps=integ.max_steps,
             # every step of a window checkpointed: a window's solve that recomputes steps inside

@@ -24,7 +24,7 @@ from .. import _linalg
 from .._validate import JaxrockInputError
 from ..bookkeeping import Record
 from ..excitation import AbstractExcitation
-from ..model import AbstractSpringIntegrator, AbstractStepper, check_autodiff, diffrax_adjoint, diffrax_status
+from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
 from .system import SpringSystem
 
@@ -128,21 +128,27 @@ class SpringIntegrator(AbstractSpringIntegrator):
             dtmax = excitation.max_step
         term = diffrax.ODETerm(lambda t, y, args: args[0].vector_field(t, y, args[1]))
         t0 = jnp.asarray(t0, dtype=float)
-        return diffrax.diffeqsolve(
+        dt0 = jnp.minimum(1e-3 / system.p_r, 0.5 * dtmax) if dtmax is not None else 1e-3 / system.p_r
+        dt0 = jnp.asarray(dt0, dtype=float)
+        sol = diffrax.diffeqsolve(
             term,
             self.diffrax_solver(),
             t0,
             t1,
-            jnp.minimum(1e-3 / system.p_r, 0.5 * dtmax) if dtmax is not None else 1e-3 / system.p_r,
+            None,  # the first step travels with the controller: no host callback (FirstStepController)
             y0,
             args=(system, excitation),
             saveat=saveat,
-            stepsize_controller=self.controller(system, excitation, dtmax),
+            stepsize_controller=FirstStepController(self.controller(system, excitation, dtmax), dt0),
             event=event,
             max_steps=self.max_steps,
             adjoint=diffrax_adjoint(self.autodiff),
             throw=throw,
         )
+        # An interval that runs backwards (a history asked to end before the excitation starts; the
+        # phases of a summary run forward by construction) is a failure, as diffrax's sign check
+        # of (t1 - t0)·dt0 reported it before the first step travelled with the controller.
+        return eqx.tree_at(lambda s: s.result, sol, diffrax.RESULTS.where(t1 < t0, diffrax.RESULTS.internal_error, sol.result))
 
 
 class DiffraxSpringStepper(AbstractStepper):
@@ -191,7 +197,10 @@ class DiffraxSpringStepper(AbstractStepper):
 
         if save is not None:
             t_final = model.run_end(system, excitation, save, t1)
-            sub_hist = diffrax.SubSaveAt(ts=save.ts, fn=lambda t, y, args: system.history(t, y, args[1], save.fields))
+            # Save times before the excitation starts hold the initial state (the ground is still):
+            # diffrax saves only within [t0, t1] (checked by `simulate` above, clipped here)
+            ts = jnp.clip(save.ts, t_start, t_final)
+            sub_hist = diffrax.SubSaveAt(ts=ts, fn=lambda t, y, args: system.history(t, y, args[1], save.fields))
             sub_steps = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
             sol = self.integrator.solve(
                 system, excitation, y0, t_start, t_final,
@@ -201,7 +210,7 @@ class DiffraxSpringStepper(AbstractStepper):
             hist, (th, om) = sol.ys
             rec = watch.steps(sol.ts[1], th, om)
             rec = rec.overturn_located(located(sol, rec), last(sol.ts[1]))
-            return watch.solution(rec, diffrax_status(sol.result), ts=sol.ts[0], history=hist)
+            return watch.solution(rec, diffrax_status(sol.result), ts=save.ts, history=hist)
 
         # phase 1: the excitation window
         sub = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)

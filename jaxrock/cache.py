@@ -1,0 +1,70 @@
+"""What a process keeps for the next one: JAX's persistent compilation cache, on by default.
+
+A jaxrock command spends most of a short run compiling; the compiled kernels are kept on disk so
+that a second run loads them instead (`benchmarks/bench_latency.py` measures both).
+
+- Where: `JAXROCK_CACHE_DIR` if set, else the user's cache folder (`platformdirs`:
+  `~/.cache/jaxrock` on Linux, honouring `XDG_CACHE_HOME`), in a subfolder per jaxrock and JAX
+  version (`xla/jaxrock-<version>-jax-<version>`), so that an upgrade never reads an older
+  release's entries and old folders can simply be deleted.
+- Off: `JAXROCK_CACHE_DIR=off` (or `0`, or empty).
+- What importing jaxrock does to the process: it sets JAX's `jax_compilation_cache_dir` to that
+  folder and `jax_persistent_cache_min_compile_time_secs` to 0 (every kernel is kept: a spectrum
+  compiles ~40 small ones besides its loops), unless the process has already chosen a cache
+  folder of its own (`JAX_COMPILATION_CACHE_DIR` or `jax.config`), which is then left as it is.
+  JAX keys each entry by the compiled program itself, its compiler version and flags, so a
+  changed kernel is a new entry, never a stale hit. JAX reads the setting at its first
+  compilation: import jaxrock before compiling anything to have it.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+VARIABLE = "JAXROCK_CACHE_DIR"
+_OFF = ("", "0", "off", "none")
+
+
+def cache_root() -> Path | None:
+    """The folder jaxrock keeps its caches in (`JAXROCK_CACHE_DIR` or the user's cache folder),
+    or None when switched off."""
+    value = os.environ.get(VARIABLE)
+    if value is not None:
+        return None if value.strip().lower() in _OFF else Path(value).expanduser()
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("jaxrock", appauthor=False))
+
+
+def _versions() -> str:
+    import jax
+
+    from .io.provenance import package_version
+
+    return f"jaxrock-{package_version()}-jax-{jax.__version__}"
+
+
+def compilation_cache_dir() -> Path | None:
+    """The persistent compilation cache's folder for this jaxrock and JAX (None: switched off)."""
+    root = cache_root()
+    return None if root is None else root / "xla" / _versions()
+
+
+def enable_compilation_cache() -> Path | None:
+    """Point JAX's persistent compilation cache at `compilation_cache_dir()` unless the process
+    chose its own; returns the folder in use (None: no persistent cache)."""
+    import jax
+
+    own = jax.config.jax_compilation_cache_dir
+    if own:
+        return Path(own)
+    path = compilation_cache_dir()
+    if path is None:
+        return None
+    jax.config.update("jax_compilation_cache_dir", str(path))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    return path
+
+
+__all__ = ["VARIABLE", "cache_root", "compilation_cache_dir", "enable_compilation_cache"]
