@@ -20,6 +20,7 @@ that a second run loads them instead (`benchmarks/bench_latency.py` measures bot
 from __future__ import annotations
 
 import os
+from importlib import metadata
 from pathlib import Path
 
 VARIABLE = "JAXROCK_CACHE_DIR"
@@ -37,10 +38,16 @@ def cache_root() -> Path | None:
     return Path(platformdirs.user_cache_dir("jaxrock", appauthor=False))
 
 
+def package_version() -> str:
+    """jaxrock's installed version ("unknown" for a source tree without an install)."""
+    try:
+        return metadata.version("jaxrock")
+    except metadata.PackageNotFoundError:  # pragma: no cover
+        return "unknown"
+
+
 def _versions() -> str:
     import jax
-
-    from .io.provenance import package_version
 
     return f"jaxrock-{package_version()}-jax-{jax.__version__}"
 
@@ -67,4 +74,4 @@ def enable_compilation_cache() -> Path | None:
     return path
 
 
-__all__ = ["VARIABLE", "cache_root", "compilation_cache_dir", "enable_compilation_cache"]
+__all__ = ["VARIABLE", "package_version", "cache_root", "compilation_cache_dir", "enable_compilation_cache"]

@@ -17,7 +17,7 @@ LAYERS = [
     ("models", ("rigid", "spring")),
     ("protocol", ("model", "bookkeeping", "scene")),
     ("values", ("geometry", "excitation", "results")),
-    ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "__init__")),
+    ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "cache", "__init__")),
 ]
 RANK = {name: rank for rank, (_, names) in enumerate(LAYERS) for name in names}
 

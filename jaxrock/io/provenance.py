@@ -11,21 +11,14 @@ from __future__ import annotations
 
 import hashlib
 import json
-from importlib import metadata
 from pathlib import Path
 
 import jax
 import numpy as np
 
 from .._validate import JaxrockInputError
+from ..cache import package_version
 from .files import write_atomically
-
-
-def package_version() -> str:
-    try:
-        return metadata.version("jaxrock")
-    except metadata.PackageNotFoundError:  # pragma: no cover - a source tree without an install
-        return "unknown"
 
 
 def value_text(x) -> str:
