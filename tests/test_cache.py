@@ -120,3 +120,25 @@ def test_second_process_loads_every_kernel(tmp_path):
     assert first["requests"] > 10 and first["hits"] == 0
     assert second == {"requests": first["requests"], "hits": first["requests"]}, (first, second)
 
+
+def test_stored_pass_is_the_jitted_pass(monkeypatch, tmp_path):
+    """The engine's pass through its exported kernel (`jaxrock.analyses.kernels`: traced once with a
+    symbolic batch size, stored, read back) gives the jitted pass's numbers bit for bit at every
+    batch size, and is stored once per structure."""
+    from jaxrock.analyses import kernels
+
+    monkeypatch.setenv(cache.VARIABLE, str(tmp_path))
+    kernels._store.cache_clear()
+    monkeypatch.setattr(kernels, "_KERNELS", {})
+    model = scene_model("rigid", jr.Block.from_slenderness(6.0, 0.2))
+    stepper = engine.make_stepper(model, model.default_integrator())
+    direct = eqx.filter_jit(lambda s, e, c: engine._vmap(lambda s, es: (lambda c: (c, s.done(c)))(s.advance(es[0], es[1], 4)), False)(s, (e, c)))
+    for size in (3, 5):
+        excs = jax.vmap(jr.RickerPulse)(jnp.linspace(2.0, 5.0, size), jnp.linspace(4.0, 9.0, size))
+        state = engine._init(stepper, excs, False)[0]
+        got, want = kernels.advance(stepper, excs, state, 4, False), direct(stepper, excs, state)
+        for a, b in zip(jax.tree_util.tree_leaves(got), jax.tree_util.tree_leaves(want)):
+            assert a.shape == b.shape and bool(jnp.all((a == b) | (jnp.isnan(a) & jnp.isnan(b)))), (size, a, b)
+        monkeypatch.setattr(kernels, "_KERNELS", {})  # the next size reads the stored kernel back
+    assert len(list((tmp_path / "kernels").rglob("advance-*.jax"))) == 1
+    kernels._store.cache_clear()

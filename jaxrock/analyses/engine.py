@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ..excitation import AbstractExcitation
 from ..model import AbstractIntegrator, AbstractModel, AbstractStepper, flag_invalid, guard_scene
 from ..results import Solution
+from . import kernels
 
 
 def batch_limit(stepper: AbstractStepper, budget_bytes: int = 2**29) -> int:
@@ -68,16 +68,11 @@ def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_bat
     return model.stepper(integrator)
 
 
-# `_init` and `_advance` return the states with their done flags: the host loop reads the flags
+# `_init` and `kernels.advance` return the states with their done flags: the host loop reads the flags
 # without sending the states back (a flexible cell's state holds its ladder of tangent inverses).
 @eqx.filter_jit
 def _init(stepper, exc, batched):
     return _vmap(lambda s, e: (lambda c: (c, s.done(c)))(s.init(e)), batched)(stepper, exc)
-
-
-@eqx.filter_jit
-def _advance(stepper, exc, state, n, batched):
-    return _vmap(lambda s, es: (lambda c: (c, s.done(c)))(s.advance(es[0], es[1], n)), batched)(stepper, (exc, state))
 
 
 @eqx.filter_jit
@@ -115,7 +110,7 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool) -> Solution
             take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
             sub_s = eqx.combine(take(dyn_s), static_s) if batched else stepper
             sub_e = eqx.combine(take(dyn_e), static_e)
-            sub_c, sub_done = tree_np(_advance(sub_s, sub_e, take(state), jnp.asarray(n_pass), batched))
+            sub_c, sub_done = tree_np(kernels.advance(sub_s, sub_e, take(state), n_pass, batched))
 
             def put(x, y):
                 x[idx] = y[: idx.size]
