@@ -219,13 +219,17 @@ def test_added_masses_improve_squat_block():
 
 
 def test_exact_peak_not_sample():
-    """The reported peak equals a dense history's peak to the solver tolerance."""
+    """The reported peak equals a dense history's peak to the solver tolerance; a history's times
+    before the excitation starts hold the initial state."""
     blk = Block.from_slenderness(10.0, 0.2)
     ex = RickerPulse(4 * G * 0.2, 2 * math.pi)
     model = SpringModel(blk)
     s = _sim(model, ex)
-    ts = jnp.linspace(float(ex.t_start), float(ex.t_end) + 10.0, 40001)
+    # two save times before the excitation starts: the body is still in its initial state there
+    ts = jnp.concatenate([float(ex.t_start) - jnp.array([2.0, 1.0]), jnp.linspace(float(ex.t_start), float(ex.t_end) + 10.0, 40001)])
     h = simulate(model, ex, save=Save(ts, ("theta",)))
+    assert h.status == Status.ok and bool(jnp.all(h.ts == ts))
+    assert bool(jnp.all(h.history["theta"][:2] == h.history["theta"][2]))
     dense = float(jnp.max(jnp.abs(h.history["theta"]))) / float(blk.alpha)
     assert float(s.max_theta) == pytest.approx(dense, abs=2e-5)
     assert float(h.max_theta) == pytest.approx(dense, abs=2e-5)

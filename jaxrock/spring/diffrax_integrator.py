@@ -198,7 +198,7 @@ class DiffraxSpringStepper(AbstractStepper):
         if save is not None:
             t_final = model.run_end(system, excitation, save, t1)
             # Save times before the excitation starts hold the initial state (the ground is still):
-            # diffrax saves only within [t0, t1] (checked by `simulate` above, clipped here)
+            # diffrax saves only within [t0, t1] (`simulate` refuses times beyond t1; earlier ones are clipped)
             ts = jnp.clip(save.ts, t_start, t_final)
             sub_hist = diffrax.SubSaveAt(ts=ts, fn=lambda t, y, args: system.history(t, y, args[1], save.fields))
             sub_steps = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
