@@ -62,7 +62,7 @@ def test_no_host_callback_in_the_kernels(scene):
     }
     if history:
         kernels["history"] = lambda m, e: jr.simulate(m, e, save=save, integrator=integ)
-    stepper = engine.make_stepper(model, model.default_integrator() if integ is None else integ)
+    stepper = engine.make_stepper(model, model.default_integrator() if integ is None else integ, False)
     excs = jax.vmap(jr.RickerPulse)(jnp.array([2.0, 3.0]), jnp.array([6.0, 8.0]))
     if stepper.schedule.passes:
         state = engine._init(stepper, excs, False)[0]
@@ -131,7 +131,7 @@ def test_stored_pass_is_the_jitted_pass(monkeypatch, tmp_path):
     kernels._store.cache_clear()
     monkeypatch.setattr(kernels, "_KERNELS", {})
     model = scene_model("rigid", jr.Block.from_slenderness(6.0, 0.2))
-    stepper = engine.make_stepper(model, model.default_integrator())
+    stepper = engine.make_stepper(model, model.default_integrator(), False)
     direct = eqx.filter_jit(lambda s, e, c: engine._vmap(lambda s, es: (lambda c: (c, s.done(c)))(s.advance(es[0], es[1], 4)), False)(s, (e, c)))
     for size in (3, 5):
         excs = jax.vmap(jr.RickerPulse)(jnp.linspace(2.0, 5.0, size), jnp.linspace(4.0, 9.0, size))

@@ -60,7 +60,7 @@ _flag = eqx.filter_jit(eqx.filter_vmap(flag_invalid))  # `flag_invalid`, scene b
 
 
 @eqx.filter_jit
-def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_batched: bool = False) -> AbstractStepper:
+def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_batched: bool) -> AbstractStepper:
     """The summary stepper of `model` (of each model, vmapped, when `model_batched`): what a model
     prepares once (mass matrices, tangents, preloads) is computed once for the whole batch."""
     if model_batched:

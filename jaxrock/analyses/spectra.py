@@ -201,7 +201,7 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
             for k in fields:
                 out[k][cells] = saved[k]
     integ = model.default_integrator() if integrator is None else integrator
-    batch_size = min(int(batch_size), batch_limit(make_stepper(model, integ)))  # compiled once, reused by run_batch
+    batch_size = min(int(batch_size), batch_limit(make_stepper(model, integ, False)))  # compiled once, reused by run_batch (the same call)
     starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
     bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
     for s in starts:
