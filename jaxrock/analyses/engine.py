@@ -20,6 +20,7 @@ from ..excitation import AbstractExcitation
 from ..model import AbstractIntegrator, AbstractModel, AbstractStepper, flag_invalid, guard_scene
 from ..results import Solution
 from . import kernels
+from .kernels import vmap_scenes as _vmap
 
 
 def batch_limit(stepper: AbstractStepper, budget_bytes: int = 2**29) -> int:
@@ -35,11 +36,6 @@ def _bucket(n: int, batch: int, smallest: int) -> int:
     while size // 4 >= max(n, smallest):
         size //= 4
     return size
-
-
-def _vmap(fn, batched: bool):
-    """vmap over (stepper, excitation, *rest): the stepper too when it carries a batch axis."""
-    return eqx.filter_vmap(fn, in_axes=(eqx.if_array(0) if batched else None, eqx.if_array(0)))
 
 
 @eqx.filter_jit

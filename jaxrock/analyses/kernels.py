@@ -49,6 +49,11 @@ def _store() -> Path | None:
     return root / "kernels" / digest.hexdigest()[:24]
 
 
+def vmap_scenes(fn, batched: bool):
+    """vmap over (stepper, excitation, *rest): the stepper too when it carries a batch axis."""
+    return eqx.filter_vmap(fn, in_axes=(eqx.if_array(0) if batched else None, eqx.if_array(0)))
+
+
 def _pass(leaves_s, leaves_e, leaves_c, n, *, trees, statics, batched):
     """The engine's pass on flat leaves: every running cell at most `n` more loop steps."""
     tree_s, tree_e, tree_c = trees
@@ -60,8 +65,7 @@ def _pass(leaves_s, leaves_e, leaves_c, n, *, trees, statics, batched):
         c = s.advance(es[0], es[1], n)
         return c, s.done(c)
 
-    in_axes = (eqx.if_array(0) if batched else None, eqx.if_array(0))
-    c, done = eqx.filter_vmap(one, in_axes=in_axes)(stepper, (exc, state))
+    c, done = vmap_scenes(one, batched)(stepper, (exc, state))
     return jax.tree_util.tree_leaves(c), done
 
 
@@ -111,4 +115,4 @@ def _kernel(structure, args, statics):
     return jax.jit(exported.call)
 
 
-__all__ = ["advance"]
+__all__ = ["advance", "vmap_scenes"]
