@@ -4,111 +4,62 @@ Layers, top-down (each imports only from its own layer and those below; README "
 front ends (`cli`, `reports`, `plotting`) → analyses (`analyses`: the batch engine, spectra,
 calibration, scenes files) → input/output (`io`) → models with their integrators (`rigid`,
 `spring`) → the protocol (`model`: model → stepper, `simulate`; `bookkeeping`: what a run records)
-→ values (`geometry`, `excitation`, `results`). Everything public is re-exported here.
+→ values (`geometry`, `excitation`, `results`) → the vocabulary (`scene`, `outputs`: the words and
+defaults of scenes and outputs, without JAX). Everything public is re-exported here.
 
-Simulations run in float64: importing jaxrock sets `jax_enable_x64`. There is no float32 mode
-(it ended the default scene in `max_steps` with θ/α = 0, and 33 of 4096 cells of a spectrum
-failed); the variable `JAXROCK_X64` that once chose it is refused unless it is 1.
+Importing jaxrock imports none of them, nor JAX: each name below is imported when first used (PEP
+562), so that the command line prints its help and refuses bad arguments in a fraction of a second.
 
-Importing jaxrock also turns on JAX's persistent compilation cache in the user's cache folder
-(`jaxrock.cache`: `JAXROCK_CACHE_DIR` moves it, `JAXROCK_CACHE_DIR=off` switches it off), unless
-the process has chosen a cache folder of its own.
+Simulations run in float64: once JAX is imported (by jaxrock or by you, before or after jaxrock),
+`jax_enable_x64` is set (`jaxrock.runtime`). There is no float32 mode (it ended the default scene
+in `max_steps` with θ/α = 0, and 33 of 4096 cells of a spectrum failed); the variable
+`JAXROCK_X64` that once chose it is refused unless it is 1. JAX's persistent compilation cache is
+turned on at the same moment, in the user's cache folder (`jaxrock.cache`: `JAXROCK_CACHE_DIR`
+moves it, `JAXROCK_CACHE_DIR=off` switches it off), unless the process has chosen a cache folder
+of its own.
 """
 
-import os as _os
+import importlib as _importlib
+import importlib.util as _importlib_util
 
-import jax as _jax
+from . import runtime as _runtime
 
-if _os.environ.get("JAXROCK_X64", "1") != "1":
-    raise ImportError(f"JAXROCK_X64 = {_os.environ['JAXROCK_X64']!r}: jaxrock runs in float64 only (its float32 mode gave wrong "
-                      "answers and was removed); unset the variable")
-_jax.config.update("jax_enable_x64", True)
+_runtime.install()  # float64 and the compilation cache, when JAX is imported
 
-from .cache import enable_compilation_cache as _enable_compilation_cache
-
-_enable_compilation_cache()  # JAX's persistent compilation cache, unless switched off or chosen by the process (jaxrock.cache)
-
-from ._validate import JaxrockInputError
-from .geometry import G, Block
-from .excitation import AbstractExcitation, AntisymmetricRickerPulse, Record, RickerPulse, StillGround
-
-__all__ = [
-    "G",
-    "Block",
-    "AbstractExcitation",
-    "RickerPulse",
-    "AntisymmetricRickerPulse",
-    "Record",
-    "StillGround",
-    "JaxrockInputError",
-]
-
-from .results import SUMMARY, Output, Save, Solution, Status, status_codes, status_names
-from .model import (AbstractIntegrator, AbstractModel, AbstractSpringIntegrator, AbstractStepper, ModelKind, Schedule,
-                    register_model_kind, simulate)
-from .rigid import EventIntegrator, RigidModel
-
-__all__ += [
-    "Save",
-    "Solution",
-    "Status",
-    "status_names",
-    "status_codes",
-    "SUMMARY",
-    "Output",
-    "AbstractIntegrator",
-    "AbstractModel",
-    "AbstractStepper",
-    "AbstractSpringIntegrator",
-    "Schedule",
-    "ModelKind",
-    "register_model_kind",
-    "simulate",
-    "EventIntegrator",
-    "RigidModel",
-]
-
-from .spring import (DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, Bilinear, Column, GeneralizedAlpha, SpringIntegrator,
-                     SpringModel, SpringSystem, Tanh, cbar_eq17, first_period_eq21, pushover_eq9)
-from .scene import pulse_of_ratios, ratios_of_pulse
-from .io import el_centro, read_at2, read_record, read_scenes, read_two_column
-
-__all__ += ["pulse_of_ratios", "ratios_of_pulse", "el_centro", "read_at2", "read_record", "read_two_column", "read_scenes"]
-
-from .analyses import (CalibrationResult, RecordSpectrum, Spectrum, calibrate_cbar, energy_ratio, energy_ratio_grid, fit_power_law,
-                       overturning_spectrum, record_overturning_scale, refine_boundaries, rm_target, run_batch, run_scenes)
-
-__all__ += ["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
-            "run_scenes"]
-
-__all__ += [
-    "SpringModel",
-    "SpringSystem",
-    "Column",
-    "SpringIntegrator",
-    "GeneralizedAlpha",
-    "DEFAULT_SMOOTHING",
-    "DEFAULT_BACKBONE",
-    "AbstractBackbone",
-    "Bilinear",
-    "Tanh",
-    "cbar_eq17",
-    "first_period_eq21",
-    "pushover_eq9",
-    "energy_ratio",
-    "energy_ratio_grid",
-    "calibrate_cbar",
-    "CalibrationResult",
-    "fit_power_law",
-    "calibration_report",
-    "rm_target",
-]
+# public name → the module that defines it (imported on first use)
+_EXPORTS = {
+    **dict.fromkeys(["G", "Block", "pulse_of_ratios", "ratios_of_pulse"], "geometry"),
+    **dict.fromkeys(["AbstractExcitation", "RickerPulse", "AntisymmetricRickerPulse", "Record", "StillGround"], "excitation"),
+    "JaxrockInputError": "_validate",
+    **dict.fromkeys(["Save", "Solution", "Status", "status_names", "status_codes"], "results"),
+    **dict.fromkeys(["SUMMARY", "Output"], "outputs"),
+    **dict.fromkeys(["AbstractIntegrator", "AbstractModel", "AbstractStepper", "AbstractSpringIntegrator", "Schedule", "simulate"],
+                    "model"),
+    **dict.fromkeys(["ModelKind", "register_model_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"],
+                    "scene"),
+    **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
+    **dict.fromkeys(["SpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "AbstractBackbone", "Bilinear",
+                     "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
+    **dict.fromkeys(["el_centro", "read_at2", "read_record", "read_two_column"], "io.records"),
+    "read_scenes": "io.scenes_file",
+    **dict.fromkeys(["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
+                     "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
+                     "rm_target"], "analyses"),
+    "calibration_report": "reports",  # writes figures: matplotlib is imported with it
+}
+__all__ = list(_EXPORTS)
 
 
 def __getattr__(name):
-    # The report writes figures: matplotlib is imported when it is first asked for, not with jaxrock.
-    if name == "calibration_report":
-        from .reports import calibration_report
+    if name in _EXPORTS:
+        value = getattr(_importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+    elif _importlib_util.find_spec(f"{__name__}.{name}") is not None:  # a submodule: jaxrock.scene, jaxrock.cli, ...
+        value = _importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module 'jaxrock' has no attribute {name!r}")
+    globals()[name] = value
+    return value
 
-        return calibration_report
-    raise AttributeError(f"module 'jaxrock' has no attribute {name!r}")
+
+def __dir__():
+    return sorted({*globals(), *__all__})

@@ -3,15 +3,17 @@
 Every public constructor calls these on its arguments. Under `jax.vmap`/`jax.jit` the values
 are tracers and cannot be inspected; the checks are then skipped (the same values were checked
 when the batch was built outside the transformation, e.g. by `overturning_spectrum`).
+
+The module imports no JAX (the command line checks its arguments with it before JAX is loaded):
+nothing can be a tracer before JAX is imported, and `within_limits` imports it when called.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 
@@ -20,7 +22,8 @@ class JaxrockInputError(ValueError):
 
 
 def is_concrete(x) -> bool:
-    return not any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
+    jax = sys.modules.get("jax")  # not imported yet: no value can be a tracer
+    return jax is None or not any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
 
 
 def _values(name: str, x) -> np.ndarray:
@@ -103,6 +106,8 @@ def check_one_scene(limits) -> None:
 
 def within_limits(limits):
     """Whether every value is finite and within its limit: a JAX boolean (traceable)."""
+    import jax.numpy as jnp
+
     ok = jnp.asarray(True)
     for lim in limits:
         ok &= jnp.all(in_range(jnp.asarray(lim.value), lim.lo, lim.hi, lo_open=lim.lo_open, hi_open=lim.hi_open))

@@ -24,13 +24,10 @@ import jax.numpy as jnp
 import equinox as eqx
 from jaxtyping import Array, Float
 
-from ._validate import JaxrockInputError, Limit, check_limits, check_positive, check_range, is_concrete
+from ._validate import JaxrockInputError, Limit, check_limits, check_positive, is_concrete
+from .scene import TAN_ALPHA_MIN, check_slenderness  # the valid slenderness (`jaxrock.scene`)
 
 G = 9.81  # m/s², SPEC
-# Least slenderness accepted (a 1000:1 column). Below it the rigid model's answers drift (θ/α off by
-# 2.6e-4 at tanα = 1e-6 against 1e-4) and at 1e-8 the default scene rocks through 16,667 impacts
-# to max_iterations; no rocking body of interest is that slender.
-TAN_ALPHA_MIN = 1e-3
 
 
 class Block(eqx.Module):
@@ -80,10 +77,7 @@ class Block(eqx.Module):
     @classmethod
     def from_slenderness(cls, height, tan_alpha, tan_alpha_base=None, *, exact_inertia: bool = True) -> "Block":
         """Column of full height `height` (2h) [m] and slenderness `tan_alpha` = b/h ∈ (0, 1)."""
-        check_positive("height (2h) [m]", height)
-        check_range("tan_alpha", tan_alpha, TAN_ALPHA_MIN, 1.0, hi_open=True)
-        if tan_alpha_base is not None:
-            check_range("tan_alpha_base", tan_alpha_base, TAN_ALPHA_MIN, 1.0, hi_open=True)
+        check_slenderness(height, tan_alpha, tan_alpha_base)
         h = 0.5 * jnp.asarray(height, dtype=float)
         b = h * jnp.asarray(tan_alpha, dtype=float)
         bb = b if tan_alpha_base is None else h * jnp.asarray(tan_alpha_base, dtype=float)
@@ -151,3 +145,14 @@ class Block(eqx.Module):
     def uplift_acceleration(self):
         """Least |üg| that uplifts the rigid block from rest: g tanα′ (eq. 26)."""
         return G * self.b_base / self.h
+
+
+def pulse_of_ratios(block: Block, accel_ratio, omega_ratio):
+    """(a_p [m/s²], ω_p [rad/s]) of the spectra's ratios a_p/(g tanα′) and ω_p/p′ (`jaxrock.scene.AXES`;
+    numbers or arrays)."""
+    return accel_ratio * G * jnp.tan(block.alpha_r), omega_ratio * block.p_r
+
+
+def ratios_of_pulse(block: Block, a_p, omega_p):
+    """(a_p/(g tanα′), ω_p/p′) of a pulse's a_p [m/s²] and ω_p [rad/s]."""
+    return a_p / (G * jnp.tan(block.alpha_r)), omega_p / block.p_r

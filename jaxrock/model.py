@@ -7,13 +7,14 @@ integrator settings are a separate value; the output request is a `Save` (or not
 Every entry point drives a model the same way: the model pairs itself with an integrator into an
 `AbstractStepper` (init, step, done, finish; its `Schedule` says how batches advance it), and
 `simulate`, the spectra (`jaxrock.analyses.engine.run_batch`) and the scenes files (`jaxrock.io.scenes_file`) only
-call those methods. A model kind that scenes files name is registered with `register_model_kind`.
+call those methods. A model kind that scenes files name is registered with `register_model_kind`
+(`jaxrock.scene`).
 """
 
 from __future__ import annotations
 
 import abc
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import diffrax
 import equinox as eqx
@@ -231,30 +232,6 @@ class AbstractModel(eqx.Module):
     def limits(self) -> tuple[Limit, ...]:
         """Valid ranges of the model's parameters beyond its block's (`jaxrock._validate.Limit`)."""
         return ()
-
-
-class ModelKind(NamedTuple):
-    """A model kind that scenes files name (`jaxrock.io.scenes_file`'s `model` column, the CLI's `--model`):
-    `build(block, **parameters)` makes the model of one scene (traceable: batches vmap it), from the
-    scene's `Block` and the values of its `parameters` (batch columns, e.g. `eta`, `cbar`, `E`; a
-    parameter left out is not passed, so the builder's default applies)."""
-
-    name: str
-    build: Callable[..., "AbstractModel"]
-    parameters: tuple[str, ...] = ()
-    description: str = ""
-
-
-MODEL_KINDS: dict[str, ModelKind] = {}
-
-
-def register_model_kind(name: str, build: Callable[..., "AbstractModel"], parameters: tuple[str, ...] = (),
-                        description: str = "") -> ModelKind:
-    """Make a model kind nameable in scenes files (`jaxrock.io.scenes_file`); a module registers its own."""
-    if not name or name != name.lower() or "," in name:
-        raise JaxrockInputError(f"model kind {name!r}: a lower-case name without commas")
-    MODEL_KINDS[name] = kind = ModelKind(name, build, tuple(parameters), description)
-    return kind
 
 
 def scene_limits(model: AbstractModel, excitation: AbstractExcitation) -> tuple[Limit, ...]:

@@ -1,14 +1,21 @@
 """The scene vocabulary: the words a scene is described in, written once. The command line's
 options, the scenes file's columns and the spectra's axes are generated from it.
 
-- Model kinds: the registry `jaxrock.model.MODEL_KINDS` (`model_kinds()`: rigid, spring,
-  spring-flexible, and any kind registered since); `DEFAULT_MODEL`; `UNDAMPED`, the value of each
-  damping parameter that dissipates nothing.
-- Pulse kinds: `PULSES` (name → excitation class of `jaxrock.excitation`); a new pulse kind is a
-  class there and a line here. `DEFAULT_PULSE`.
+It imports no JAX (the bottom of the layers): the command line builds its help and refuses bad
+arguments from it before JAX is loaded, and the classes it names are imported when first used.
+
+- Model kinds: the registry `MODEL_KINDS` (`model_kinds()`: rigid, spring, spring-flexible, and
+  any kind registered since with `register_model_kind`); `DEFAULT_MODEL`; `UNDAMPED`, the value of
+  each damping parameter that dissipates nothing; `MODEL_PARAMETERS`, the numeric model parameters.
+- Pulse kinds: `PULSES` (name → excitation class of `jaxrock.excitation`, `pulse_class`); a new
+  pulse kind is a class there and a line here. `DEFAULT_PULSE`.
 - Records: `RECORD_ALIASES`, the names of the packaged El Centro 1940 NS record.
+- Geometry: `TAN_ALPHA_MIN` and `check_slenderness`, the valid height and slenderness of a block.
+- Spring backbones: `BACKBONES` (name → class of `jaxrock.spring.base_spring`), `DEFAULT_BACKBONE`,
+  `DEFAULT_SMOOTHING`.
 - Ratios (SPEC "Spectra"): the spectra's axes a_p/(g tanα′) and ω_p/p′ (`AXES`), converted to and
-  from the physical a_p [m/s²] and ω_p [rad/s] by `pulse_of_ratios` and `ratios_of_pulse` only.
+  from the physical a_p [m/s²] and ω_p [rad/s] by `jaxrock.geometry.pulse_of_ratios` and
+  `ratios_of_pulse` only (functions of a `Block`).
 - Concrete defaults (paper sections 4–6): `CONCRETE_E`, `CONCRETE_RHO`, `CONCRETE_ZETA`.
 - The scene's parameters (`PARAMETERS`): each column of a scenes file with its unit, meaning and
   valid values / default (the scenes file's table, `parameter_table`).
@@ -16,36 +23,71 @@ options, the scenes file's columns and the spectra's axes are generated from it.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import importlib
+from typing import Callable, NamedTuple
 
-import jax.numpy as jnp
+from ._validate import JaxrockInputError, check_positive, check_range
 
-from ._validate import JaxrockInputError
-from .excitation import AntisymmetricRickerPulse, RickerPulse
-from .geometry import G, TAN_ALPHA_MIN, Block
+
+def _resolve(module: str, name: str):
+    """A class or function named in this vocabulary, imported on first use."""
+    return getattr(importlib.import_module(module), name)
+
 
 # -- model kinds -----------------------------------------------------------------------------------
+class ModelKind(NamedTuple):
+    """A model kind that scenes files name (`jaxrock.io.scenes_file`'s `model` column, the CLI's `--model`):
+    `build(block, **parameters)` makes the model of one scene (traceable: batches vmap it), from the
+    scene's `Block` and the values of its `parameters` (batch columns, e.g. `eta`, `cbar`, `E`; a
+    parameter left out is not passed, so the builder's default applies). `build` may be named as
+    "module:function", imported when a model is first made (the built-in kinds are)."""
+
+    name: str
+    build: Callable | str  # (jaxrock.Block, **parameters) → a jaxrock model
+    parameters: tuple[str, ...] = ()
+    description: str = ""
+
+    def model(self, block, **parameters):
+        """The model of one scene: `build(block, **parameters)`."""
+        build = _resolve(*self.build.split(":")) if isinstance(self.build, str) else self.build
+        return build(block, **parameters)
+
+
+MODEL_KINDS: dict[str, ModelKind] = {}
+
+
+def register_model_kind(name: str, build: Callable | str, parameters: tuple[str, ...] = (), description: str = "") -> ModelKind:
+    """Make a model kind nameable in scenes files (`jaxrock.io.scenes_file`) and the command line."""
+    if not name or name != name.lower() or "," in name:
+        raise JaxrockInputError(f"model kind {name!r}: a lower-case name without commas")
+    MODEL_KINDS[name] = kind = ModelKind(name, build, tuple(parameters), description)
+    return kind
+
+
+register_model_kind("rigid", "jaxrock.rigid.model:scenes_file_model", ("eta",), "Housner's rigid block (RM)")
+register_model_kind("spring", "jaxrock.spring.model:quasi_rigid_scene", ("cbar", "backbone", "smoothing"),
+                    "quasi-rigid spring model (SM), added masses")
+register_model_kind("spring-flexible", "jaxrock.spring.model:flexible_scene", ("cbar", "E", "rho", "zeta", "backbone", "smoothing"),
+                    "spring model with an elastic column (concrete by default)")
 DEFAULT_MODEL = "rigid"
 UNDAMPED = {"eta": 1.0, "cbar": 0.0}  # a damping parameter's value that dissipates nothing
+MODEL_PARAMETERS = ("eta", "cbar", "E", "rho", "zeta")  # the numeric model parameters (scenes files' columns, lower-cased)
 
 
 def model_kinds() -> tuple[str, ...]:
     """The model kinds a scene may name (the built-in rigid, spring and spring-flexible, and any
     kind registered with `jaxrock.register_model_kind` since)."""
-    from .model import MODEL_KINDS  # the protocol's registry reads this module's defaults
-
     return tuple(MODEL_KINDS)
 
 
 def takes(parameter: str) -> tuple[str, ...]:
     """The model kinds that take a parameter."""
-    from .model import MODEL_KINDS
-
     return tuple(k.name for k in MODEL_KINDS.values() if parameter in k.parameters)
 
 
 # -- pulse kinds and records -----------------------------------------------------------------------
-PULSES = {"symmetric": RickerPulse, "antisymmetric": AntisymmetricRickerPulse}  # eq. 28, eq. 29
+# name → a class of jaxrock.excitation by name (eq. 28, eq. 29), or any callable (a_p, ω_p) → excitation
+PULSES: dict[str, str | Callable] = {"symmetric": "RickerPulse", "antisymmetric": "AntisymmetricRickerPulse"}
 DEFAULT_PULSE = "symmetric"
 RECORD_ALIASES = ("elcentro", "el-centro", "el_centro")  # the packaged El Centro 1940 NS (`jaxrock.el_centro`)
 
@@ -55,7 +97,8 @@ def pulse_class(pulse) -> type:
     if isinstance(pulse, str):
         if pulse not in PULSES:
             raise JaxrockInputError(f"pulse = {pulse!r}; valid: {', '.join(PULSES)}")
-        return PULSES[pulse]
+        cls = PULSES[pulse]
+        return _resolve("jaxrock.excitation", cls) if isinstance(cls, str) else cls
     return pulse
 
 
@@ -63,18 +106,42 @@ def is_builtin_record(name: str) -> bool:
     return name.strip().lower() in RECORD_ALIASES
 
 
+# -- geometry --------------------------------------------------------------------------------------
+# Least slenderness accepted (a 1000:1 column). Below it the rigid model's answers drift (θ/α off by
+# 2.6e-4 at tanα = 1e-6 against 1e-4) and at 1e-8 the default scene rocks through 16,667 impacts
+# to max_iterations; no rocking body of interest is that slender.
+TAN_ALPHA_MIN = 1e-3
+
+
+def check_slenderness(height, tan_alpha, tan_alpha_base=None) -> None:
+    """Refuse, in one line, a block's full height 2h ≤ 0 or a slenderness tanα (and the base's
+    tanα′) outside [TAN_ALPHA_MIN, 1) (`jaxrock.Block.from_slenderness`'s checks)."""
+    check_positive("height (2h) [m]", height)
+    check_range("tan_alpha", tan_alpha, TAN_ALPHA_MIN, 1.0, hi_open=True)
+    if tan_alpha_base is not None:
+        check_range("tan_alpha_base", tan_alpha_base, TAN_ALPHA_MIN, 1.0, hi_open=True)
+
+
+# -- spring backbones ------------------------------------------------------------------------------
+BACKBONES = {"bilinear": "Bilinear", "tanh": "Tanh"}  # name → a class of jaxrock.spring.base_spring (its `name`)
+# Backbone and θs/α′: the study of benchmarks/bench_backbone.py (its results file): 192 quasi-rigid
+# and 48 flexible (concrete, 10 elements) scenes, tanα 0.05–0.35, 2h 1–50 m, ω_p/p′ 1–15,
+# a_p/(g tanα) 1–8, both pulses; error of max|θ|/α against the sharp limit (bilinear, θy = 1e-6 α).
+# This default, tanh at θs = 1e-4 α, leaves up to 4.9e-2 (quasi-rigid) and 3.9e-2 (flexible), median
+# 1.7e-4 and 7.6e-4, the largest on antisymmetric pulses near a_p/(g tanα) ≈ 4, ω_p/p′ ≈ 4. The
+# bilinear backbone at θy = 1e-5 α (`backbone="bilinear", smoothing=1e-5`) is within 8.3e-4
+# wherever the limit is settled, for 15 % more cost: use it for values. It stays off by default
+# because its kink breaks derivatives through the adaptive steps (`bench_backbone.py --part
+# gradients`): calibration's reverse ∂r_eq²/∂c̄ (Tsit5 1e-10) came out −3.43 against finite
+# differences' −1.988, and d max θ / d ln a_p was 33 % (median) from central differences with
+# generalized-α's jacfwd, 2.7 % with Tsit5's forward mode (tanh: 0.13 % and 3e-6).
+DEFAULT_SMOOTHING = 1e-4
+DEFAULT_BACKBONE = "tanh"
+
+
 # -- ratios ----------------------------------------------------------------------------------------
-AXES = {"accel_ratio": "a_p/(g tan alpha)", "omega_ratio": "omega_p/p"}  # the spectra's axes (rocking α′, p′)
-
-
-def pulse_of_ratios(block: Block, accel_ratio, omega_ratio):
-    """(a_p [m/s²], ω_p [rad/s]) of the ratios a_p/(g tanα′) and ω_p/p′ (numbers or arrays)."""
-    return accel_ratio * G * jnp.tan(block.alpha_r), omega_ratio * block.p_r
-
-
-def ratios_of_pulse(block: Block, a_p, omega_p):
-    """(a_p/(g tanα′), ω_p/p′) of a pulse's a_p [m/s²] and ω_p [rad/s]."""
-    return a_p / (G * jnp.tan(block.alpha_r)), omega_p / block.p_r
+# the spectra's axes (rocking α′, p′), converted by `jaxrock.geometry.pulse_of_ratios` / `ratios_of_pulse`
+AXES = {"accel_ratio": "a_p/(g tan alpha)", "omega_ratio": "omega_p/p"}
 
 
 # -- concrete defaults -----------------------------------------------------------------------------
@@ -101,8 +168,6 @@ def _kinds(names) -> str:
 def parameters() -> tuple[Parameter, ...]:
     """Every parameter of a scene, in a scenes file's column order (the model kinds that take each
     model parameter read from the registry, so that a registered kind shows)."""
-    from .model import MODEL_KINDS
-
     pulses = " / ".join(f"`{k}`" for k in PULSES)
     return (
         Parameter("height", "m", "full height 2h of the column", "> 0, required"),

@@ -15,7 +15,7 @@ import jaxrock as jr
 from helpers import invoke, read_csv, write
 from jaxrock import JaxrockInputError
 from jaxrock.io.scenes_file import read_scenes, scene_model
-from jaxrock.scene import PULSES
+from jaxrock.scene import pulse_class
 
 ROWS = """id,height,tan_alpha,width,tan_alpha_base,model,pulse,a_p,accel_ratio,omega_p,omega_ratio,scale,eta,cbar,E,rho,zeta
 a,10,0.2,,,rigid,symmetric,,3,,2,,,,,,
@@ -35,10 +35,10 @@ def _expected(values: dict, base):
     tan_a = num("tan_alpha") if num("tan_alpha") is not None else num("width") / h
     block = jr.Block.from_slenderness(h, tan_a, num("tan_alpha_base"))
     model = scene_model(values["model"], block, eta=num("eta"), cbar=num("cbar"), E=num("E"), rho=num("rho"), zeta=num("zeta"))
-    if values["pulse"] in PULSES:
+    if values["pulse"] in jr.scene.PULSES:
         a = num("a_p") if num("a_p") is not None else num("accel_ratio") * float(block.uplift_acceleration)
         w = num("omega_p") if num("omega_p") is not None else num("omega_ratio") * float(block.p_r)
-        return model, PULSES[values["pulse"]](a, w)
+        return model, pulse_class(values["pulse"])(a, w)
     return model, jr.read_record(base / values["pulse"]).scaled(num("scale") or 1.0)
 
 

@@ -1,6 +1,6 @@
 """The package's import graph reads top-down (README "Layout"): a module imports only from its own
 layer or the layers below it — front ends → analyses → input/output → models → protocol → values →
-internals — so that, e.g., a model never reaches for an analysis and the I/O never for a figure."""
+vocabulary → internals — so that, e.g., a model never reaches for an analysis and the I/O never for a figure."""
 
 import ast
 from pathlib import Path
@@ -15,9 +15,10 @@ LAYERS = [
     ("analyses", ("analyses",)),
     ("input/output", ("io",)),
     ("models", ("rigid", "spring")),
-    ("protocol", ("model", "bookkeeping", "scene")),
+    ("protocol", ("model", "bookkeeping")),
     ("values", ("geometry", "excitation", "results")),
-    ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "cache", "__init__")),
+    ("vocabulary", ("scene", "outputs")),  # words and defaults, without JAX
+    ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "cache", "runtime", "__init__")),
 ]
 RANK = {name: rank for rank, (_, names) in enumerate(LAYERS) for name in names}
 

@@ -26,7 +26,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import jaxrock as jr
-from jaxrock.model import MODEL_KINDS
+from jaxrock.scene import MODEL_KINDS
 
 G = 9.81
 

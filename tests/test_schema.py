@@ -1,4 +1,4 @@
-"""One output schema (`jaxrock.results.SUMMARY`): every summary output reaches `Solution`,
+"""One output schema (`jaxrock.outputs.SUMMARY`): every summary output reaches `Solution`,
 `Spectrum`, the netCDF file, the batch results file and the command line's summaries, and a new
 output needs nothing but its line in the schema and the code that computes it."""
 
@@ -85,10 +85,10 @@ SCRIPT = textwrap.dedent("""
 def test_a_new_output_needs_only_its_schema_line_and_its_computation(tmp_path):
     pkg = tmp_path / "pkg"
     shutil.copytree(ROOT / "jaxrock", pkg / "jaxrock", ignore=shutil.ignore_patterns("__pycache__"))
-    results, bookkeeping = pkg / "jaxrock" / "results.py", pkg / "jaxrock" / "bookkeeping.py"
-    schema = results.read_text()
+    outputs, bookkeeping = pkg / "jaxrock" / "outputs.py", pkg / "jaxrock" / "bookkeeping.py"
+    schema = outputs.read_text()
     end = schema.index(")\nOUTPUTS = ")
-    results.write_text(schema[:end] + NEW_OUTPUT + schema[end + 1:])
+    outputs.write_text(schema[:end] + NEW_OUTPUT + schema[end + 1:])
     code = bookkeeping.read_text()
     anchor = '            "t_uplift": record.t_uplift,\n'
     assert code.count(anchor) == 1

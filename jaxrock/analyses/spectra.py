@@ -26,7 +26,8 @@ from ..io import provenance
 from ..io.files import exclusive, write_atomically
 from ..model import AbstractIntegrator, AbstractModel
 from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module, status_codes
-from ..scene import AXES, DEFAULT_PULSE, pulse_class, pulse_of_ratios
+from ..geometry import pulse_of_ratios
+from ..scene import AXES, DEFAULT_PULSE, pulse_class
 from .engine import batch_limit, make_stepper, run_batch
 
 

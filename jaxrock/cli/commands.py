@@ -9,16 +9,14 @@ import time
 from pathlib import Path
 from typing import Optional
 
-import equinox as eqx
 import numpy as np
 import typer
 
 from .guards import (CELL_SECONDS, EXIT_INTERRUPTED, EXIT_UNTRUSTED, RECORD_RUN_SECONDS, _estimate, _exit_if_untrusted, _guarded,
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts)
-from ..io.scenes_file import MODEL_PARAMETERS
-from ..results import OUTPUTS, RESULT_COLUMNS, status_codes
-from ..spring.base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING
-from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, PULSES, RECORD_ALIASES, UNDAMPED, model_kinds, parameter_help
+from ..outputs import OUTPUTS, RESULT_COLUMNS
+from ..scene import (DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MODEL_PARAMETERS, PULSES, RECORD_ALIASES,
+                     UNDAMPED, model_kinds, parameter_help)
 from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model, even_batch,
                       parse_values, solution_summary, spectrum_summary)
 
@@ -64,7 +62,6 @@ def spectrum(
     """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
     from ..io.files import output_stem
     from .._validate import check_writable
-    from ..analyses.spectra import overturning_spectrum
 
     wr = _axis("omega", omega_min, omega_max, n_omega)
     ar = _axis("accel", accel_min, accel_max, n_accel)
@@ -80,6 +77,7 @@ def spectrum(
     ck = Path(f"{out}.checkpoint") if checkpoint else None
     t0 = time.perf_counter()
     bs = even_batch(wr.size * ar.size, batch_size)
+    from ..analyses.spectra import overturning_spectrum
     from ..interrupt import Interrupted
 
     try:
@@ -88,6 +86,8 @@ def spectrum(
     except Interrupted:
         _interrupted(ck, wr.size * ar.size)
     seconds = time.perf_counter() - t0
+    import equinox as eqx
+
     spec = eqx.tree_at(lambda s: s.attrs, spec, {**spec.attrs, "model_kind": model.value, "undamped": int(undamped),
                                                   "history": _history()})
     from ..reports import spectrum_files
@@ -148,9 +148,6 @@ def simulate(
     n_points: Optional[int] = typer.Option(None, help="plot: number of saved time points (default 1500)"),
 ):
     """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
-    from ..plotting import plot_history
-    from ..results import Save
-
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta,
                     backbone=backbone, smoothing=smoothing)
     exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio, units)
@@ -186,12 +183,17 @@ def simulate(
             w = float(exc.omega_p)
             t_start, t_end = max(t_start, -8.0 / w), min(t_end, 8.0 / w)
         ts = np.linspace(t_start, t_end + tf, n_points)
+        from ..plotting import plot_history
+        from ..results import Save
+
         hist = _simulate(m, exc, save=Save(ts, ("theta",)), integrator=integ)
         import matplotlib.pyplot as plt
 
         fig = plot_history(hist, exc, model=m, path=plot, title=f"{model.value}, 2h = {height:g} m, tanα = {tan_alpha:g}\n{desc}")
         plt.close(fig)
         typer.echo(f"wrote {plot}")
+    from ..results import status_codes
+
     _exit_if_untrusted(_status_counts(status_codes(sol.status)), "run")
 
 
@@ -212,12 +214,13 @@ def batch(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
     from .._validate import check_writable
-    from ..analyses.scenes import run_scenes
     from ..io.results_file import count_results, results_path_for
-    from ..interrupt import Interrupted
 
     results = results_path_for(scenes, results)
     check_writable("results", results)
+    from ..analyses.scenes import run_scenes
+    from ..interrupt import Interrupted
+
     try:
         rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet)
     except Interrupted:
@@ -261,9 +264,7 @@ def record_spectrum(
 ):
     """Least scale factor of a record that overturns the body, per height (paper figure 10)."""
     from .._validate import JaxrockInputError, check_writable
-    from ..analyses.spectra import record_overturning_scale
     from ..io.files import output_stem
-    from ..reports import record_spectrum_files
 
     hs = parse_values("--heights", heights)
     sc = parse_values("--scales", scales)
@@ -277,6 +278,9 @@ def record_spectrum(
     _hold(out, "--out")
     per_run = RECORD_RUN_SECONDS * CELL_SECONDS[model.value] / CELL_SECONDS["rigid"] * float(exc.t_end - exc.t_start) / 40.0
     _estimate(hs.size * (sc.size + refine), model.value, yes, what="record runs", per_cell=per_run)
+    from ..analyses.spectra import record_overturning_scale
+    from ..reports import record_spectrum_files
+
     t0 = time.perf_counter()
     rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet)
     seconds = time.perf_counter() - t0
@@ -304,7 +308,6 @@ def calibrate(
     """Calibrate the spring model's damper c̄ against the rigid model's η⁴ (paper eq. 17, figure 7)."""
     # Thin wrapper over jaxrock.reports.calibration_report.
     from .._validate import JaxrockInputError, check_range, check_writable
-    from ..reports import calibration_report
 
     _check_count("--max-iter", max_iter)
     check_writable("--out", out / "calibration.csv")
@@ -315,6 +318,8 @@ def calibrate(
         if np.unique(ta).size < 3:
             raise JaxrockInputError(f"--tan-alphas = {tan_alphas!r}: {np.unique(ta).size} distinct value(s); "
                                     "the power-law fit c̄ = k (α/0.1)^n needs at least 3")
+    from ..reports import calibration_report
+
     t0 = time.perf_counter()
     rep = calibration_report(out, tan_alphas=ta, progress=not quiet, max_iter=max_iter)
     typer.echo(rep.format_table())

@@ -10,8 +10,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..scene import PULSES, model_kinds
-from ..spring.base_spring import BACKBONES
+from ..scene import BACKBONES, PULSES, model_kinds
 
 MAX_LIST = 100_000  # values of a list option ('a:b:n')
 
@@ -77,12 +76,10 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
     parameter of the kind to its undamped value (`jaxrock.scene.UNDAMPED`). Built by
     `scene_model`, as a scenes-file row is."""
     from .._validate import JaxrockInputError
-    from ..geometry import Block
-    from ..io.scenes_file import scene_model
-    from ..scene import UNDAMPED, takes
+    from ..scene import UNDAMPED, check_slenderness, takes
 
     kind = ModelKind(model).value
-    block = Block.from_slenderness(height, tan_alpha, tan_alpha_base)
+    check_slenderness(height, tan_alpha, tan_alpha_base)  # refused before JAX is imported
     given = {k: v for k, v in parameters.items() if v is not None}
     for name in given:
         if kind not in takes(name):
@@ -94,7 +91,10 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
             given[name] = UNDAMPED[name]
     if "backbone" in given:
         given["backbone"] = BackboneKind(given["backbone"]).value
-    return scene_model(kind, block, **given)
+    from ..geometry import Block
+    from ..io.scenes_file import scene_model
+
+    return scene_model(kind, Block.from_slenderness(height, tan_alpha, tan_alpha_base), **given)
 
 
 def _integrator(model: ModelKind, tol: Optional[float]):
@@ -160,7 +160,8 @@ def spectrum_summary(spec, seconds: float) -> str:
 
 def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio, units=None):
     from .._validate import JaxrockInputError, check_range
-    from ..scene import is_builtin_record, pulse_of_ratios, ratios_of_pulse
+    from ..geometry import pulse_of_ratios, ratios_of_pulse
+    from ..scene import is_builtin_record, pulse_class
 
     if record is not None:
         for name, v in (("--a-p", a_p), ("--accel-ratio", accel_ratio), ("--omega-p", omega_p), ("--omega-ratio", omega_ratio)):
@@ -196,7 +197,7 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
         else:
             check_range("--omega-ratio", omega_ratio, 0.0, math.inf, lo_open=True, hi_open=True)
             omega_p = float(pulse_of_ratios(block, 1.0, omega_ratio)[1])
-    exc = PULSES[pulse](a_p, omega_p)
+    exc = pulse_class(pulse)(a_p, omega_p)
     a_r, w_r = (float(x) for x in ratios_of_pulse(block, a_p, omega_p))
     desc = f"{pulse} Ricker pulse a_p = {a_p:.4g} m/s² ({a_r:.4g} g tanα), ω_p = {omega_p:.4g} rad/s ({w_r:.4g} p)"
     return exc, desc

@@ -5,9 +5,7 @@
 - `tables`: CSV tables written exactly and atomically;
 - `provenance`: how a result was made (versions, parameters, the command), checkpoints;
 - `files`: output paths, atomic writes, exclusive locks.
+
+The package imports none of them (the command line checks its output paths with `files` before
+JAX is imported); the readers are public as `jaxrock.read_record`, `jaxrock.read_scenes`, ....
 """
-
-from .records import el_centro, read_at2, read_record, read_two_column
-from .scenes_file import read_scenes
-
-__all__ = ["el_centro", "read_at2", "read_record", "read_two_column", "read_scenes"]

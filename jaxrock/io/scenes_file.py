@@ -57,10 +57,9 @@ import numpy as np
 
 from .._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
 from ..excitation import Record
-from ..geometry import TAN_ALPHA_MIN, Block
-from ..model import MODEL_KINDS
-from ..scene import (CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA, DEFAULT_MODEL, DEFAULT_PULSE, PULSES, RECORD_ALIASES, model_kinds,
-                     is_builtin_record, parameter_table, parameters, pulse_of_ratios, takes)
+from ..geometry import Block, pulse_of_ratios
+from ..scene import (CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA, DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, MODEL_PARAMETERS, PULSES,
+                     RECORD_ALIASES, TAN_ALPHA_MIN, is_builtin_record, model_kinds, parameter_table, parameters, pulse_class, takes)
 from ..results import RESULT_COLUMNS, summary_doc
 from .tables import csv_text
 
@@ -71,7 +70,6 @@ INPUT_COLUMNS = tuple(p.name.lower() for p in parameters())  # lower-cased, as t
 # the closest known one (a typo such as `modle` ran the rigid model in silence).
 PASS_THROUGH = ("id", "name", "label", "group", "note", "notes", "comment")
 PASS_THROUGH_PREFIX = "x_"
-MODEL_PARAMETERS = ("eta", "cbar", "E", "rho", "zeta")  # model parameter columns (lower-cased in files)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -161,7 +159,7 @@ def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
 
 def scene_model(kind: str, block: Block, **parameters):
     """The model of one scene of model kind `kind` (`model_kinds()`), built by its registered builder
-    (`jaxrock.model.ModelKind`) from `block` and the given `parameters` (None: the default):
+    (`jaxrock.scene.ModelKind`) from `block` and the given `parameters` (None: the default):
     shared by the batch rows and the CLI. Refuses a parameter the kind does not take."""
     if kind not in MODEL_KINDS:
         raise JaxrockInputError(f"model = {kind!r}; valid: {', '.join(model_kinds())}")
@@ -170,7 +168,7 @@ def scene_model(kind: str, block: Block, **parameters):
     extra = sorted(set(given) - set(entry.parameters))
     if extra:
         raise JaxrockInputError(f"{', '.join(extra)}: not a parameter of model {kind} (it takes {', '.join(entry.parameters) or 'none'})")
-    return entry.build(block, **given)
+    return entry.model(block, **given)
 
 
 def _invalid_lanes(stacked) -> np.ndarray:
@@ -211,7 +209,7 @@ class Scenes:
     def excitation(self, exc: str, idx) -> object:
         """The stacked excitations of rows `idx` (all of excitation kind `exc`)."""
         if exc in PULSES:
-            return jax.vmap(PULSES[exc])(jnp.asarray(self.params["a_p"][idx]), jnp.asarray(self.params["omega_p"][idx]))
+            return jax.vmap(pulse_class(exc))(jnp.asarray(self.params["a_p"][idx]), jnp.asarray(self.params["omega_p"][idx]))
         return _stack([self.records[i].scaled(self.params["scale"][i]) for i in idx])
 
 

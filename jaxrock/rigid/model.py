@@ -11,7 +11,7 @@ from .._validate import JaxrockInputError, Limit, check_limits
 from ..bookkeeping import Watch
 from ..excitation import AbstractExcitation
 from ..geometry import G, Block
-from ..model import AbstractIntegrator, AbstractModel, register_model_kind
+from ..model import AbstractIntegrator, AbstractModel
 from ..results import Save
 from .event_integrator import EventIntegrator, RigidStepper
 
@@ -91,9 +91,7 @@ class RigidModel(AbstractModel):
         return integrator.stepper(self, None, save, t1)  # the rigid model prepares nothing
 
 
-def _scenes_file_model(block: Block, eta=None) -> RigidModel:
-    """A scenes file's rigid model (the block's η′ by default)."""
+def scenes_file_model(block: Block, eta=None) -> RigidModel:
+    """A scenes file's rigid model (the block's η′ by default): the builder of the model kind
+    "rigid" (`jaxrock.scene.MODEL_KINDS`)."""
     return RigidModel(block, eta=eta)
-
-
-register_model_kind("rigid", _scenes_file_model, ("eta",), "Housner's rigid block (RM)")

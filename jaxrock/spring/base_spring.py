@@ -12,8 +12,8 @@ each backbone here has one parameter, the pre-yield rotation ``θs = smoothing �
   rotation θy = θs, then flat at My. Its error against the rigid-plastic limit is of first order
   in θs: at θy = 1e-5 α′ at most 8.3e-4 in max|θ|/α over the 240 scenes of
   `benchmarks/bench_backbone.py` whose limit is settled (2.7e-3 on one near-tie scene; 2.2e-2 at
-  θy = 1e-4 α′). Its kink breaks derivatives through adaptive steps (`DEFAULT_SMOOTHING`'s note
-  below): use it for values, not yet for gradients;
+  θy = 1e-4 α′). Its kink breaks derivatives through adaptive steps (`jaxrock.scene.DEFAULT_SMOOTHING`'s
+  note): use it for values, not yet for gradients;
 - `Tanh` (the default): ``M = My tanh(θ/θs)``, smooth everywhere, so derivatives through it are
   good; it reaches 99.5 % of My only at 3 θs and its error at equal θs is 9–30× the bilinear's
   (same study: 4.9e-2 quasi-rigid, 3.9e-2 flexible at the default θs = 1e-4 α′).
@@ -36,20 +36,7 @@ import jax.numpy as jnp
 
 from ..geometry import G
 from .._validate import JaxrockInputError
-
-# Backbone and θs/α′: the study of benchmarks/bench_backbone.py (its results file): 192 quasi-rigid
-# and 48 flexible (concrete, 10 elements) scenes, tanα 0.05–0.35, 2h 1–50 m, ω_p/p′ 1–15,
-# a_p/(g tanα) 1–8, both pulses; error of max|θ|/α against the sharp limit (bilinear, θy = 1e-6 α).
-# This default, tanh at θs = 1e-4 α, leaves up to 4.9e-2 (quasi-rigid) and 3.9e-2 (flexible), median
-# 1.7e-4 and 7.6e-4, the largest on antisymmetric pulses near a_p/(g tanα) ≈ 4, ω_p/p′ ≈ 4. The
-# bilinear backbone at θy = 1e-5 α (`backbone="bilinear", smoothing=1e-5`) is within 8.3e-4
-# wherever the limit is settled, for 15 % more cost: use it for values. It stays off by default
-# because its kink breaks derivatives through the adaptive steps (`bench_backbone.py --part
-# gradients`): calibration's reverse ∂r_eq²/∂c̄ (Tsit5 1e-10) came out −3.43 against finite
-# differences' −1.988, and d max θ / d ln a_p was 33 % (median) from central differences with
-# generalized-α's jacfwd, 2.7 % with Tsit5's forward mode (tanh: 0.13 % and 3e-6).
-DEFAULT_SMOOTHING = 1e-4
-DEFAULT_BACKBONE = "tanh"
+from ..scene import BACKBONES, DEFAULT_BACKBONE, DEFAULT_SMOOTHING  # the names and defaults (`jaxrock.scene`)
 
 
 def damper(cbar, m, R):
@@ -139,16 +126,13 @@ class Tanh(AbstractBackbone):
         return jnp.sign(r) * u
 
 
-BACKBONES = {b.name: b for b in (Bilinear, Tanh)}
-
-
 def as_backbone(backbone: "AbstractBackbone | str") -> AbstractBackbone:
     """A backbone value from itself or its name."""
     if isinstance(backbone, AbstractBackbone):
         return backbone
     if isinstance(backbone, str) and backbone in BACKBONES:
-        return BACKBONES[backbone]()
+        return globals()[BACKBONES[backbone]]()
     raise JaxrockInputError(f"backbone = {backbone!r}; valid: {tuple(BACKBONES)} or a jaxrock backbone value")
 
 
-__all__ = ["AbstractBackbone", "Bilinear", "Tanh", "BACKBONES", "as_backbone"]
+__all__ = ["AbstractBackbone", "Bilinear", "Tanh", "DEFAULT_BACKBONE", "DEFAULT_SMOOTHING", "as_backbone"]

@@ -18,7 +18,7 @@ from .._validate import JaxrockInputError, Limit, check_limits
 from ..bookkeeping import Watch
 from ..excitation import AbstractExcitation
 from ..geometry import G, Block
-from ..model import AbstractModel, AbstractSpringIntegrator, register_model_kind
+from ..model import AbstractModel, AbstractSpringIntegrator
 from ..scene import CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA
 from . import beam
 from .base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, as_backbone
@@ -259,20 +259,17 @@ def _pushover(system: SpringSystem, theta):
     return jnp.vectorize(one)(theta)
 
 
-def _quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -> SpringModel:
-    """A scenes file's quasi-rigid spring model (added masses; default damper, backbone, smoothing)."""
+def quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -> SpringModel:
+    """A scenes file's quasi-rigid spring model (added masses; default damper, backbone, smoothing):
+    the builder of the model kind "spring" (`jaxrock.scene.MODEL_KINDS`)."""
     return SpringModel(block, None, cbar=cbar, backbone=DEFAULT_BACKBONE if backbone is None else backbone,
                        smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
 
 
-def _flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None) -> SpringModel:
-    """A scenes file's flexible spring model: a concrete column unless E, ρ, ζ are given."""
+def flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None) -> SpringModel:
+    """A scenes file's flexible spring model, a concrete column unless E, ρ, ζ are given: the
+    builder of the model kind "spring-flexible" (`jaxrock.scene.MODEL_KINDS`)."""
     column = Column(CONCRETE_E if E is None else E, CONCRETE_RHO if rho is None else rho)
     return SpringModel(block, column, zeta=CONCRETE_ZETA if zeta is None else zeta, cbar=cbar,
                        backbone=DEFAULT_BACKBONE if backbone is None else backbone,
                        smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
-
-
-register_model_kind("spring", _quasi_rigid_scene, ("cbar", "backbone", "smoothing"), "quasi-rigid spring model (SM), added masses")
-register_model_kind("spring-flexible", _flexible_scene, ("cbar", "E", "rho", "zeta", "backbone", "smoothing"),
-                    "spring model with an elastic column (concrete by default)")

@@ -1,0 +1,83 @@
+"""The summary outputs of a run, declared once: `SUMMARY`, a tuple of `Output`s (re-exported by
+`jaxrock.results`, which builds `Solution` from it).
+
+It imports no JAX (the command line's help names the outputs before JAX is loaded). A new summary
+output is a line in `SUMMARY` and the code that computes it (`jaxrock.bookkeeping.Watch.solution`,
+or an integrator passing it there).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+class Output(NamedTuple):
+    """One summary output of a run.
+
+    - `name`: the field of `Solution` and `Spectrum`, the netCDF variable and the CSV column;
+    - `label`: how the command line's summaries call it;
+    - `meaning` (the netCDF long_name) and `units` (CF: "1" for ratios, flags and counts);
+    - `kind`: "float", "bool" or "int";
+    - `absent`: its value from a model that does not compute it (None: every model does).
+    """
+
+    name: str
+    label: str
+    meaning: str
+    units: str
+    kind: str
+    absent: float | bool | int | None = None
+
+    @property
+    def dtype(self) -> type:
+        return {"float": np.float64, "bool": np.bool_, "int": np.int64}[self.kind]
+
+    @property
+    def annotation(self):
+        from jaxtyping import Array, Bool, Float, Int
+
+        return {"float": Float, "bool": Bool, "int": Int}[self.kind][Array, ""]
+
+    def csv_value(self, x) -> float | int:
+        """The value a CSV cell holds (`jaxrock.io.tables.cell` writes it): floats exactly, flags 0/1."""
+        return float(x) if self.kind == "float" else int(x)
+
+    def line(self, x) -> str:
+        """One scene's value as the command line prints it ("max θ/α = 0.663037", "overturned: no")."""
+        if self.kind == "bool":
+            return f"{self.label}: {'yes' if bool(x) else 'no'}"
+        if self.kind == "int":
+            return f"{self.label}: {int(x)}"
+        if self.units == "s":
+            return f"{self.label}: {f't = {float(x):.4f} s' if np.isfinite(x) else 'never'}"
+        return f"{self.label} = {float(x):.6f}"
+
+    def invalid(self, x, ok):
+        """`x` where `ok`, else what an invalid scene reports (NaN, no, or the absent value)."""
+        import jax.numpy as jnp
+
+        if self.kind == "float":
+            return jnp.where(ok, x, jnp.asarray(jnp.nan, dtype=x.dtype))
+        if self.kind == "bool":
+            return x & ok
+        return jnp.where(ok, x, jnp.asarray(0 if self.absent is None else self.absent, dtype=x.dtype))
+
+
+SUMMARY: tuple[Output, ...] = (
+    Output("max_theta", "max θ/α", "max |theta|/alpha' over the whole response (alpha' the rocking slenderness: alpha without "
+           "a base): the exact peak; the threshold once overturned, never beyond it", "1", "float"),
+    Output("overturned", "overturned", "|theta| reached threshold*alpha'", "1", "bool"),
+    Output("t_overturn", "overturned at", "time of overturning (+inf: did not overturn)", "s", "float"),
+    Output("uplifted", "uplifted", "the body left its rest state (|theta| passed the uplift rotation)", "1", "bool"),
+    Output("t_uplift", "uplifted at", "first time |theta| passed the uplift rotation (+inf: never)", "s", "float"),
+    Output("n_impacts", "impacts", "impacts at theta = 0 (the rigid model's; 0 for spring models)", "1", "int", absent=0),
+)
+OUTPUTS = {o.name: o for o in SUMMARY}
+RESULT_COLUMNS: tuple[str, ...] = (*OUTPUTS, "status")  # a results row: the summary, then the status name
+
+
+def summary_doc() -> str:
+    """The summary outputs as a list (`name` [units]: meaning), for docstrings."""
+    return "\n".join(f"- `{o.name}` [{o.units}]: {o.meaning}." for o in SUMMARY)

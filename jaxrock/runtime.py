@@ -1,0 +1,68 @@
+"""What importing jaxrock does to the process's JAX, and when: float64 and the persistent
+compilation cache (`jaxrock.cache`), set the moment JAX is imported.
+
+Importing jaxrock does not import JAX (the command line prints its help and refuses bad arguments
+without it; the package's names are imported on first use). So that every array of the process is
+float64 as before, `install()` (run by `import jaxrock`) configures JAX right after JAX's own import
+finishes, whoever imports it, or at once if JAX is already imported:
+
+- `jax_enable_x64` on (jaxrock runs in float64 only; `JAXROCK_X64` other than 1 is refused);
+- the persistent compilation cache (`jaxrock.cache.enable_compilation_cache`).
+
+Nothing is written to the environment, so child processes are left as they were.
+"""
+
+from __future__ import annotations
+
+import importlib.abc
+import importlib.util
+import os
+import sys
+
+
+def check_x64_variable() -> None:
+    if os.environ.get("JAXROCK_X64", "1") != "1":
+        raise ImportError(f"JAXROCK_X64 = {os.environ['JAXROCK_X64']!r}: jaxrock runs in float64 only (its float32 mode gave "
+                          "wrong answers and was removed); unset the variable")
+
+
+def configure_jax() -> None:
+    """float64 and the persistent compilation cache, on the imported JAX."""
+    import jax
+
+    from .cache import enable_compilation_cache
+
+    jax.config.update("jax_enable_x64", True)
+    enable_compilation_cache()
+
+
+class _ConfigureOnImport(importlib.abc.MetaPathFinder):
+    """Finds `jax` as the other finders do, and runs `configure_jax` once its module has executed."""
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname != "jax":
+            return None
+        sys.meta_path.remove(self)  # used once: the finders below find JAX's own spec
+        spec = importlib.util.find_spec(fullname)
+        if spec is None or spec.loader is None:
+            return spec
+        execute = spec.loader.exec_module
+
+        def exec_module(module):
+            execute(module)
+            configure_jax()
+
+        spec.loader.exec_module = exec_module
+        return spec
+
+
+def install() -> None:
+    """Configure JAX now if it is imported, else as soon as it is."""
+    check_x64_variable()
+    if "jax" in sys.modules:
+        configure_jax()
+    elif not any(isinstance(f, _ConfigureOnImport) for f in sys.meta_path):
+        sys.meta_path.insert(0, _ConfigureOnImport())
+
+
+__all__ = ["install", "configure_jax", "check_x64_variable"]
