@@ -258,6 +258,13 @@ def simulate(
       at construction; under `jax.vmap`/`jax.jit`, where it cannot be, the run returns
       `Status.invalid_input` with NaN numbers.
     """
+    return run_scene(*scene_arguments(model, excitation, integrator=integrator, save=save, t1=t1))
+
+
+def scene_arguments(model: AbstractModel, excitation: AbstractExcitation, *, integrator: AbstractIntegrator | None = None,
+                    save: Save | None = None, t1=None) -> tuple:
+    """`simulate`'s checks and defaults: the arguments (model, excitation, integrator, save, t1) of
+    its compiled run, `run_scene`."""
     if not isinstance(model, AbstractModel):
         raise JaxrockInputError(f"model must be a jaxrock model (RigidModel, SpringModel), got {type(model).__name__}")
     if not isinstance(excitation, AbstractExcitation):
@@ -282,13 +289,14 @@ def simulate(
         check_range("t1 (end time) [s]", t1, float(excitation.t_start), float("inf"), lo_open=True, hi_open=True)
     if integrator is None:
         integrator = model.default_integrator()
-    return _run(model, excitation, integrator, save, t1)
+    return model, excitation, integrator, save, t1
 
 
 @eqx.filter_jit
-def _run(model, excitation, integrator, save, t1):
-    # Compiled once per structure (model kind, mesh, save request): repeated calls with new
-    # numbers reuse it. Composes with an outer jit, vmap and grad.
+def run_scene(model, excitation, integrator, save, t1) -> Solution:
+    """One scene's run on checked arguments (`scene_arguments`). Compiled once per structure
+    (model kind, mesh, save request): repeated calls with new numbers reuse it. Composes with an
+    outer jit, vmap and grad."""
     model, excitation, ok = guard_scene(model, excitation)
     return flag_invalid(model.stepper(integrator, save, t1).solve(excitation), ok)
 

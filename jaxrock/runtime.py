@@ -36,8 +36,11 @@ def configure_jax() -> None:
     enable_compilation_cache()
 
 
-class _ConfigureOnImport(importlib.abc.MetaPathFinder):
-    """Finds `jax` as the other finders do, and runs `configure_jax` once its module has executed."""
+_AFTER_IMPORT: list = []  # callables run once JAX is imported (`on_jax_import`)
+
+
+class _AfterJaxImport(importlib.abc.MetaPathFinder):
+    """Finds `jax` as the other finders do, and runs `_AFTER_IMPORT` once its module has executed."""
 
     def find_spec(self, fullname, path=None, target=None):
         if fullname != "jax":
@@ -50,19 +53,27 @@ class _ConfigureOnImport(importlib.abc.MetaPathFinder):
 
         def exec_module(module):
             execute(module)
-            configure_jax()
+            for fn in _AFTER_IMPORT:
+                fn()
 
         spec.loader.exec_module = exec_module
         return spec
 
 
+def on_jax_import(fn) -> None:
+    """Run `fn()` as soon as JAX is imported (before anything uses it), or now if it is."""
+    if "jax" in sys.modules:
+        fn()
+        return
+    _AFTER_IMPORT.append(fn)
+    if not any(isinstance(f, _AfterJaxImport) for f in sys.meta_path):
+        sys.meta_path.insert(0, _AfterJaxImport())
+
+
 def install() -> None:
     """Configure JAX now if it is imported, else as soon as it is."""
     check_x64_variable()
-    if "jax" in sys.modules:
-        configure_jax()
-    elif not any(isinstance(f, _ConfigureOnImport) for f in sys.meta_path):
-        sys.meta_path.insert(0, _ConfigureOnImport())
+    on_jax_import(configure_jax)
 
 
-__all__ = ["install", "configure_jax", "check_x64_variable"]
+__all__ = ["install", "configure_jax", "check_x64_variable", "on_jax_import"]

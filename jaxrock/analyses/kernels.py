@@ -1,4 +1,5 @@
-"""The batch engine's loop pass, traced once for every batch size and kept between processes.
+"""Kernels traced once and kept between processes: the batch engine's loop pass (for every batch
+size) and one scene's run (`simulate`, as the command line calls it).
 
 Tracing a stepper's `advance` under `vmap` is most of a short run's cost (the rigid stepper: ~2 s
 on a 2-core CPU, diffrax's solve with its events and root finds), and `jit` traces again for every
@@ -6,7 +7,10 @@ new batch size: the compacted passes of one spectrum use three sizes and its ref
 Here the pass is exported (`jax.export`) with a symbolic batch size, so one trace serves every
 size in the process, and its serialized form is kept in the cache folder (`jaxrock.cache`,
 `kernels/`), so that a later process does not trace it at all. XLA's compilation for each size is
-then JAX's persistent compilation cache's. The numbers are the jitted pass's, bit for bit.
+then JAX's persistent compilation cache's. `simulate` here is `jaxrock.simulate` kept the same way
+(its trace is ~1 s of a second `jaxrock simulate`); its output's structure, which a flat exported
+kernel does not carry, is kept beside it (a pickled template). The numbers are the jitted
+functions', bit for bit.
 
 An entry is keyed by the pass's structure (the stepper's and the excitation's types and static
 values, every array's dtype and shape but the batch axis) under a folder named by a digest of
@@ -19,8 +23,11 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import pickle
 from importlib import metadata
 from pathlib import Path
+
+import numpy as np
 
 import equinox as eqx
 import jax
@@ -29,8 +36,12 @@ from jax import export
 
 from .. import cache
 from ..io.files import write_atomically
+from ..model import run_scene, scene_arguments
 
 _TRACED_BY = ("jax", "jaxlib", "equinox", "diffrax", "optimistix", "lineax", "jaxtyping")
+# A kernel is only read back by the same versions of these (its folder's digest), so the custom
+# calls JAX guarantees no compatibility for across versions (LAPACK's QR in lineax's solves) are kept.
+_EXPORT = functools.partial(export.export, disabled_checks=[export.DisabledSafetyCheck.custom_call("ALL")])
 
 
 @functools.cache
@@ -72,6 +83,43 @@ def _pass(leaves_s, leaves_e, leaves_c, n, *, trees, statics, batched):
 _KERNELS: dict = {}
 
 
+def _shapes(leaves, batched: bool) -> tuple:
+    return tuple((x.shape[1:] if batched else x.shape, str(x.dtype)) for x in leaves)
+
+
+def _static(tree) -> tuple:
+    """A static part (of `eqx.partition`) as its leaves and structure: part of a kernel's key."""
+    leaves, treedef = jax.tree_util.tree_flatten(tree)
+    return tuple(leaves), treedef
+
+
+def _path(kind: str, structure) -> Path | None:
+    """Where the kernel of this structure is kept (None: the cache is off, or the structure has no
+    stable text: an object printed with its address)."""
+    text = repr(structure)
+    if _store() is None or " at 0x" in text:
+        return None
+    return _store() / f"{kind}-{hashlib.sha256(text.encode()).hexdigest()[:32]}.jax"
+
+
+def _load_or_export(path: Path | None, export_now, extra=None):
+    """The exported kernel at `path` (and its `extra` file's object), else `export_now()` →
+    (exported, extra), stored there for the next process."""
+    extra_path = None if path is None else path.with_suffix(".pkl")
+    if path is not None and path.exists() and (extra is None or extra_path.exists()):
+        exported = export.deserialize(bytearray(path.read_bytes()))
+        return exported, (None if extra is None else pickle.loads(extra_path.read_bytes()))
+    exported, obj = export_now()
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if extra is not None:  # written first: a kernel file is only ever found with its template
+            blob_extra = pickle.dumps(obj)
+            write_atomically(extra_path, lambda tmp: tmp.write_bytes(blob_extra))
+        blob = bytes(exported.serialize())
+        write_atomically(path, lambda tmp: tmp.write_bytes(blob))
+    return exported, obj
+
+
 def advance(stepper, excitations, state, n, batched: bool):
     """(state, done) after at most `n` more loop steps of every cell: `engine`'s pass, through a
     kernel traced once for all batch sizes (see the module docstring)."""
@@ -81,38 +129,68 @@ def advance(stepper, excitations, state, n, batched: bool):
     leaves_e, tree_e = jax.tree_util.tree_flatten(dyn_e)
     leaves_c, tree_c = jax.tree_util.tree_flatten(state)
     n = jnp.asarray(n)
-    shapes = lambda xs, b: tuple((x.shape[1:] if b else x.shape, str(x.dtype)) for x in xs)
-    static = lambda t: (lambda leaves, tree: (tuple(leaves), tree))(*jax.tree_util.tree_flatten(t))
-    structure = (batched, tree_s, tree_e, tree_c, static(static_s), static(static_e),
-                 shapes(leaves_s, batched), shapes(leaves_e, True), shapes(leaves_c, True), str(n.dtype))
+    structure = (batched, tree_s, tree_e, tree_c, _static(static_s), _static(static_e),
+                 _shapes(leaves_s, batched), _shapes(leaves_e, True), _shapes(leaves_c, True), str(n.dtype))
     kernel = _KERNELS.get(structure)
     if kernel is None:
-        kernel = _KERNELS[structure] = _kernel(structure, (leaves_s, leaves_e, leaves_c, n), (static_s, static_e))
+        kernel = _KERNELS[structure] = _advance_kernel(structure, (leaves_s, leaves_e, leaves_c, n), (static_s, static_e))
     leaves, done = kernel(leaves_s, leaves_e, leaves_c, n)
     return jax.tree_util.tree_unflatten(tree_c, leaves), done
 
 
-def _kernel(structure, args, statics):
+def _advance_kernel(structure, args, statics):
     """The jitted call of the stored pass of this structure, exported (and stored) if not there."""
     batched, tree_s, tree_e, tree_c = structure[:4]
-    text = repr(structure)
-    path = None
-    if _store() is not None and " at 0x" not in text:
-        path = _store() / f"advance-{hashlib.sha256(text.encode()).hexdigest()[:32]}.jax"
-    if path is not None and path.exists():
-        exported = export.deserialize(bytearray(path.read_bytes()))
-    else:
+
+    def export_now():
         (b,) = export.symbolic_shape("b")
         spec = lambda x, lead: jax.ShapeDtypeStruct((b, *x.shape[1:]) if lead else x.shape, x.dtype)
         leaves_s, leaves_e, leaves_c, n = args
         fn = functools.partial(_pass, trees=(tree_s, tree_e, tree_c), statics=statics, batched=batched)
-        exported = export.export(jax.jit(fn))([spec(x, batched) for x in leaves_s], [spec(x, True) for x in leaves_e],
-                                              [spec(x, True) for x in leaves_c], jax.ShapeDtypeStruct((), n.dtype))
-        if path is not None:
-            blob = bytes(exported.serialize())
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write_atomically(path, lambda tmp: tmp.write_bytes(blob))
+        return _EXPORT(jax.jit(fn))([spec(x, batched) for x in leaves_s], [spec(x, True) for x in leaves_e],
+                                          [spec(x, True) for x in leaves_c], jax.ShapeDtypeStruct((), n.dtype)), None
+
+    exported, _ = _load_or_export(_path("advance", structure), export_now)
     return jax.jit(exported.call)
 
 
-__all__ = ["advance", "vmap_scenes"]
+def simulate(model, excitation, *, integrator=None, save=None, t1=None):
+    """`jaxrock.simulate` (the same checks, the same numbers), through a kernel traced once per
+    structure and kept between processes. Not for use under `jit`, `vmap` or `grad`: call
+    `jaxrock.simulate` there."""
+    args = scene_arguments(model, excitation, integrator=integrator, save=save, t1=t1)
+    dyn, static = eqx.partition(args, eqx.is_array)
+    leaves, tree = jax.tree_util.tree_flatten(dyn)
+    structure = ("simulate", tree, _static(static), _shapes(leaves, False))
+    kernel = _KERNELS.get(structure)
+    if kernel is None:
+        kernel = _KERNELS[structure] = _simulate_kernel(structure, leaves, tree, static)
+    return kernel(leaves)
+
+
+def _simulate_kernel(structure, leaves, tree, static):
+    """The call of the stored `run_scene` of this structure: flat leaves in, the `Solution` out
+    (its array leaves from the kernel; its structure and static part from the kept template)."""
+
+    def export_now():
+        out = {}
+
+        def flat(xs):
+            dyn_out, out["static"] = eqx.partition(run_scene(*eqx.combine(jax.tree_util.tree_unflatten(tree, xs), static)),
+                                                   eqx.is_array)
+            ys, out["tree"] = jax.tree_util.tree_flatten(dyn_out)
+            return ys
+
+        exported = _EXPORT(jax.jit(flat))([jax.ShapeDtypeStruct(x.shape, x.dtype) for x in leaves])
+        template = jax.tree_util.tree_unflatten(out["tree"], [np.zeros((), a.dtype) for a in exported.out_avals])
+        return exported, (template, out["static"])
+
+    try:
+        exported, (template, static_out) = _load_or_export(_path("simulate", structure), export_now, extra=True)
+    except NotImplementedError:  # JAX exports no host callback: a quasi-rigid history by diffrax keeps one (test_cache)
+        return lambda xs: run_scene(*eqx.combine(jax.tree_util.tree_unflatten(tree, xs), static))
+    call, tree_out = jax.jit(exported.call), jax.tree_util.tree_structure(template)
+    return lambda xs: eqx.combine(jax.tree_util.tree_unflatten(tree_out, call(xs)), static_out)
+
+
+__all__ = ["advance", "simulate", "vmap_scenes"]

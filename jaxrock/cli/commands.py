@@ -3,7 +3,6 @@ written by `jaxrock.reports` and the analyses themselves."""
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 from pathlib import Path
@@ -103,18 +102,11 @@ def spectrum(
     _exit_if_untrusted(_status_counts(spec.status), "cell(s)")
 
 
-@functools.cache
-def _jitted_simulate():
-    import equinox as eqx
-
-    from ..model import simulate as _simulate
-
-    return eqx.filter_jit(_simulate)
-
-
 def _simulate(model, excitation, save=None, integrator=None):
-    """`jaxrock.simulate`, jitted (one compilation per model/excitation structure per process)."""
-    return _jitted_simulate()(model, excitation, save=save, integrator=integrator)
+    """`jaxrock.simulate` through a kernel kept between processes (`jaxrock.analyses.kernels`)."""
+    from ..analyses import kernels
+
+    return kernels.simulate(model, excitation, save=save, integrator=integrator)
 
 
 @app.command()
