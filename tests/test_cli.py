@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import jaxrock as jr
 from helpers import invoke, read_csv
-from jaxrock.cli import even_batch, parse_values
+from jaxrock.cli import parse_values
 from jaxrock.analyses.spectra import Spectrum, overturning_spectrum
 
 # jaxrock.simulate, jitted: the same compiled function as the CLI's (shared cache per function)
@@ -114,9 +114,6 @@ def test_help_shows_units_and_ranges_as_written(cmd, text):
 
 
 def test_helpers():
-    assert even_batch(2304, 4096) == 576
-    assert 2304 % even_batch(2304, 500) == 0 and even_batch(2304, 500) <= 500
-    assert even_batch(9, 4096) == 9
     np.testing.assert_allclose(parse_values("--x", "1:3:3"), [1, 2, 3])
     np.testing.assert_allclose(parse_values("--x", "1, 2,5"), [1, 2, 5])
     with pytest.raises(jr.JaxrockInputError, match="--x"):

@@ -30,9 +30,32 @@ def batch_limit(stepper: AbstractStepper, budget_bytes: int = 2**29) -> int:
     return 2**62 if per <= 0 else max(64, budget_bytes // per)
 
 
+def ladder(n: int, smallest: int) -> int:
+    """The size a batch of `n` cells is padded to: the least smallest·2^k ≥ n. Every batch and every
+    gathered pass of it runs at a size of this ladder, so that a few compiled kernels serve every
+    call (a spectrum's grid, its gathered passes and its refinement share them; padding costs at
+    most the first pass's cells twice over)."""
+    size = smallest
+    while size < n:
+        size *= 2
+    return size
+
+
+def even_batches(n: int, limit: int, smallest: int) -> int:
+    """A batch size for `n` cells, at most `limit`: the largest smallest·4^k that splits them into
+    at least four batches (a progress bar that moves); a batch and the passes gathered from it
+    (a quarter, a sixteenth) are then sizes of the `ladder`, unpadded. A grid of fewer cells runs
+    as one batch."""
+    size = smallest
+    while size * 4 <= limit and -(-n // (size * 4)) >= 4:
+        size *= 4
+    return min(size if n > 4 * smallest else n, limit)
+
+
 def _bucket(n: int, batch: int, smallest: int) -> int:
-    """Pad sizes to a few fixed values so the compiled pass is reused (batch, batch/4, batch/16, ...)."""
-    size = batch
+    """The size a pass of `n` running cells is padded to: the batch's ladder size, a quarter of it,
+    a sixteenth, ... (no less than `smallest`)."""
+    size = ladder(batch, smallest)
     while size // 4 >= max(n, smallest):
         size //= 4
     return size

@@ -28,7 +28,7 @@ from ..model import AbstractIntegrator, AbstractModel
 from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module, status_codes
 from ..geometry import pulse_of_ratios
 from ..scene import AXES, DEFAULT_PULSE, pulse_class
-from .engine import batch_limit, make_stepper, run_batch
+from .engine import batch_limit, even_batches, make_stepper, run_batch
 
 
 def _flags(long_name: str, meanings, dtype=np.int8) -> dict:
@@ -163,7 +163,8 @@ def overturning_spectrum(
 
     - `pulse`: a pulse kind's name (`jaxrock.scene.PULSES`: "symmetric" Ricker, "antisymmetric"
       eq. 29) or a pulse class.
-    - `batch_size`: cells run together in one vmapped batch (memory bound).
+    - `batch_size`: the most cells run together in one vmapped batch (memory bound); the grid is
+      split into batches of a size the batch engine's passes share (`engine.even_batches`).
     - `checkpoint`: a folder where each finished batch is added as its own file (nothing is
       rewritten); rerunning the same call after an interruption resumes from it, and it is
       removed when the spectrum (with its refinement) is complete, unless `keep_checkpoint`
@@ -202,7 +203,8 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
             for k in fields:
                 out[k][cells] = saved[k]
     integ = model.default_integrator() if integrator is None else integrator
-    batch_size = min(int(batch_size), batch_limit(make_stepper(model, integ, False)))  # compiled once, reused by run_batch (the same call)
+    stepper = make_stepper(model, integ, False)  # compiled once, reused by run_batch (the same call)
+    batch_size = even_batches(n, min(int(batch_size), batch_limit(stepper)), stepper.schedule.smallest_batch)
     starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
     bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
     for s in starts:

@@ -8,6 +8,6 @@ codes, estimates, locks, signals).
 """
 
 from .commands import app, main
-from .options import build_model, even_batch, parse_values
+from .options import build_model, parse_values
 
-__all__ = ["app", "main", "build_model", "even_batch", "parse_values"]
+__all__ = ["app", "main", "build_model", "parse_values"]

@@ -16,7 +16,7 @@ from .guards import (CELL_SECONDS, EXIT_INTERRUPTED, EXIT_UNTRUSTED, RECORD_RUN_
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import (DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MODEL_PARAMETERS, PULSES, RECORD_ALIASES,
                      UNDAMPED, model_kinds, parameter_help)
-from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model, even_batch,
+from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model,
                       parse_values, solution_summary, spectrum_summary)
 
 UNDAMPED_HELP = "no energy loss: " + ", ".join(f"{k} = {v:g}" for k, v in UNDAMPED.items()) + " (whichever the model takes)"
@@ -50,7 +50,8 @@ def spectrum(
                             "ending in /) means <out>/spectrum.nc and .png"),
     undamped: bool = typer.Option(False, "--undamped", help=UNDAMPED_HELP),
     checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in the folder <out>.checkpoint; a rerun resumes"),
-    batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into equal batches"),
+    batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into batches "
+                                   "of sizes the compiled passes share"),
     refine: int = typer.Option(10, min=0, max=40, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
     tol: Optional[float] = typer.Option(
         None, help="spring models: run generalized-α at this local tolerance in (0, 1) (e.g. 1e-6: a quasi-rigid pulse grid ~15x "
@@ -75,12 +76,11 @@ def spectrum(
     _estimate(wr.size * ar.size, kind, yes)
     ck = Path(f"{out}.checkpoint") if checkpoint else None
     t0 = time.perf_counter()
-    bs = even_batch(wr.size * ar.size, batch_size)
     from ..analyses.spectra import overturning_spectrum
     from ..interrupt import Interrupted
 
     try:
-        spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=bs, progress=not quiet,
+        spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=batch_size, progress=not quiet,
                                     checkpoint=ck, keep_checkpoint=True, refine=refine)
     except Interrupted:
         _interrupted(ck, wr.size * ar.size)

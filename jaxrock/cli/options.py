@@ -109,19 +109,6 @@ def _integrator(model: ModelKind, tol: Optional[float]):
     return GeneralizedAlpha(rtol=tol, atol=tol)
 
 
-def even_batch(n: int, limit: int) -> int:
-    """A batch size that splits n cells into equal batches of at most `limit`, about four or more
-    of them (a progress bar that moves), so that no smaller last batch needs its own compilation.
-    Falls back to `min(n, limit)` when n has no suitable divisor."""
-    if n <= 256:
-        return min(n, limit)
-    k0 = max(4, -(-n // limit))
-    for k in range(k0, k0 + 64):
-        if n % k == 0 and n // k >= 64:
-            return n // k
-    return min(n, limit)
-
-
 def _grid_line(o, values) -> str:
     """A summary output over a spectrum's cells: a flag's count and share, else its range."""
     if o.kind == "bool":
