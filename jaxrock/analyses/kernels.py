@@ -9,8 +9,8 @@ size in the process, and its serialized form is kept in the cache folder (`jaxro
 `kernels/`), so that a later process does not trace it at all. XLA's compilation for each size is
 then JAX's persistent compilation cache's. `simulate` here is `jaxrock.simulate` kept the same way
 (its trace is ~1 s of a second `jaxrock simulate`); its output's structure, which a flat exported
-kernel does not carry, is kept beside it (a pickled template). The numbers are the jitted
-functions', bit for bit.
+kernel does not carry, is kept beside it (a pickled template: the cache folder is read as the
+user's own files are). The numbers are the jitted functions', bit for bit.
 
 An entry is keyed by the pass's structure (the stepper's and the excitation's types and static
 values, every array's dtype and shape but the batch axis) under a folder named by a digest of
@@ -27,11 +27,10 @@ import pickle
 from importlib import metadata
 from pathlib import Path
 
-import numpy as np
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import export
 
 from .. import cache
@@ -102,22 +101,22 @@ def _path(kind: str, structure) -> Path | None:
     return _store() / f"{kind}-{hashlib.sha256(text.encode()).hexdigest()[:32]}.jax"
 
 
-def _load_or_export(path: Path | None, export_now, extra=None):
-    """The exported kernel at `path` (and its `extra` file's object), else `export_now()` →
-    (exported, extra), stored there for the next process."""
-    extra_path = None if path is None else path.with_suffix(".pkl")
-    if path is not None and path.exists() and (extra is None or extra_path.exists()):
+def _load_or_export(path: Path | None, export_now, with_template: bool = False):
+    """(exported kernel, its template or None) from `path` (the template from the file beside it),
+    else from `export_now()`, then stored there for the next process."""
+    template_path = None if path is None else path.with_suffix(".pkl")
+    if path is not None and path.exists() and (not with_template or template_path.exists()):
         exported = export.deserialize(bytearray(path.read_bytes()))
-        return exported, (None if extra is None else pickle.loads(extra_path.read_bytes()))
-    exported, obj = export_now()
+        return exported, (pickle.loads(template_path.read_bytes()) if with_template else None)
+    exported, template = export_now()
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        if extra is not None:  # written first: a kernel file is only ever found with its template
-            blob_extra = pickle.dumps(obj)
-            write_atomically(extra_path, lambda tmp: tmp.write_bytes(blob_extra))
+        if with_template:  # written first: a kernel file is only ever found with its template
+            blob_template = pickle.dumps(template)
+            write_atomically(template_path, lambda tmp: tmp.write_bytes(blob_template))
         blob = bytes(exported.serialize())
         write_atomically(path, lambda tmp: tmp.write_bytes(blob))
-    return exported, obj
+    return exported, template
 
 
 def advance(stepper, excitations, state, n, batched: bool):
@@ -148,7 +147,7 @@ def _advance_kernel(structure, args, statics):
         leaves_s, leaves_e, leaves_c, n = args
         fn = functools.partial(_pass, trees=(tree_s, tree_e, tree_c), statics=statics, batched=batched)
         return _EXPORT(jax.jit(fn))([spec(x, batched) for x in leaves_s], [spec(x, True) for x in leaves_e],
-                                          [spec(x, True) for x in leaves_c], jax.ShapeDtypeStruct((), n.dtype)), None
+                                    [spec(x, True) for x in leaves_c], jax.ShapeDtypeStruct((), n.dtype)), None
 
     exported, _ = _load_or_export(_path("advance", structure), export_now)
     return jax.jit(exported.call)
@@ -186,7 +185,7 @@ def _simulate_kernel(structure, leaves, tree, static):
         return exported, (template, out["static"])
 
     try:
-        exported, (template, static_out) = _load_or_export(_path("simulate", structure), export_now, extra=True)
+        exported, (template, static_out) = _load_or_export(_path("simulate", structure), export_now, with_template=True)
     except NotImplementedError:  # JAX exports no host callback: a quasi-rigid history by diffrax keeps one (test_cache)
         return lambda xs: run_scene(*eqx.combine(jax.tree_util.tree_unflatten(tree, xs), static))
     call, tree_out = jax.jit(exported.call), jax.tree_util.tree_structure(template)
