@@ -10,8 +10,9 @@ that a second run loads them instead (`benchmarks/bench_latency.py` measures bot
 - Off: `JAXROCK_CACHE_DIR=off` (or `0`, or empty).
 - What importing jaxrock does to the process (once JAX is imported: `jaxrock.runtime`): it sets
   JAX's `jax_compilation_cache_dir` to that folder and `jax_persistent_cache_min_compile_time_secs`
-  to 0 (every kernel is kept: a spectrum compiles ~40 small ones besides its loops), unless the process has already chosen a cache
-  folder of its own (`JAX_COMPILATION_CACHE_DIR` or `jax.config`), which is then left as it is.
+  to 0 (every kernel is kept: a spectrum compiles ~40 small ones besides its loops), unless the
+  process has already chosen a cache folder of its own (`JAX_COMPILATION_CACHE_DIR` or
+  `jax.config`), which is then left as it is.
   JAX keys each entry by the compiled program itself, its compiler version and flags, so a
   changed kernel is a new entry, never a stale hit. JAX reads the setting at its first
   compilation: import jaxrock before compiling anything to have it.
