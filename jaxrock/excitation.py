@@ -134,6 +134,11 @@ class AbstractRicker(AbstractExcitation):
         fhi = jnp.abs(self.shape(hi))
         already = valid & (flo > ell)
         inside = valid & ~already & (fhi > ell)
+        # The pieces are ordered: the first one that exceeds holds the answer, and only it is
+        # bisected (one wavelet evaluation per bisection, not one per piece).
+        hit = already | inside
+        k = jnp.argmax(hit)
+        found = hit[k]
 
         def bisect(_, ab):
             a, b = ab
@@ -141,12 +146,10 @@ class AbstractRicker(AbstractExcitation):
             up = jnp.abs(self.shape(m)) > ell
             return jnp.where(up, a, m), jnp.where(up, m, b)
 
-        a, b = jax.lax.fori_loop(0, _BISECTIONS, bisect, (lo, hi))
-        cand = jnp.where(already, lo, jnp.where(inside, b, jnp.inf))
-        x_up = jnp.min(cand)
-        found = jnp.isfinite(x_up)
+        _, b = jax.lax.fori_loop(0, _BISECTIONS, bisect, (lo[k], hi[k]))
+        x_up = jnp.where(already[k], lo[k], b)
         x_safe = jnp.where(found, x_up, 0.0)
-        was_already = jnp.any(already & (cand == x_up))
+        was_already = jnp.any(already & (lo == x_up))  # the exceedance starts a piece
         tau = x_safe / self.omega_p
         tau = jnp.where(
             was_already,
