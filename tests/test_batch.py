@@ -51,6 +51,9 @@ def test_vectorised_reading_builds_each_row_as_built_alone(tmp_path):
         models, excs = scenes.model(kind, idx), scenes.excitation(exc, idx)
         for lane, i in enumerate(idx):
             want_m, want_e = _expected(scenes.values[i], tmp_path)
+            # intensity: the excitation's peak |üg| (a pulse's is |a_p|) over the block's uplift level
+            peak = float(np.max(np.abs(want_e.acc)) * want_e.scale) if isinstance(want_e, jr.Record) else abs(float(want_e.a_p))
+            assert scenes.intensity([i])[0] == pytest.approx(peak / float(want_m.block.uplift_acceleration), rel=1e-12)
             for got, want in ((models, want_m), (excs, want_e)):
                 got_leaves = jax.tree_util.tree_leaves(jax.tree_util.tree_map(lambda x: x[lane], got))
                 want_leaves = jax.tree_util.tree_leaves(want)
@@ -145,6 +148,26 @@ def test_batch_round_trip_and_resume(tmp_path):
     write(scenes, SCENES.replace("b,5,0.15", "b,6,0.15"))
     r = invoke("batch", scenes, res, "--resume", "--quiet")
     assert r.exit_code == 2 and "row 2" in r.output
+
+
+def test_a_group_runs_in_chunks_of_like_intensity(tmp_path, monkeypatch):
+    """Rows alternating between a pulse below the uplift level (the block stays at rest) and one far
+    above it (it overturns), run in chunks of 4: each chunk holds one kind, so no chunk waits on
+    scenes unlike its own, and every row still gets its own result, in row order."""
+    from jaxrock.analyses import scenes as scenes_module
+
+    ratios = [0.5 if k % 2 == 0 else 8.0 for k in range(8)]
+    text = "height,tan_alpha,pulse,accel_ratio,omega_ratio\n" + "".join(f"10,0.2,symmetric,{r},2\n" for r in ratios)
+    path = write(tmp_path / "s.csv", text)
+    chunks, run = [], scenes_module.run_batch
+    monkeypatch.setattr(scenes_module, "run_batch",
+                        lambda m, e, **kw: chunks.append(np.abs(np.asarray(e.a_p)) / (jr.G * 0.2)) or run(m, e, **kw))
+    jr.run_scenes(path, tmp_path / "r.csv", chunk_size=4, progress=False)
+    assert len(chunks) == 2 and all(np.all(c < 1) or np.all(c > 1) for c in chunks), chunks
+    rows = read_csv(tmp_path / "r.csv")
+    assert [int(x["row"]) for x in rows] == list(range(1, 9))
+    assert [int(x["uplifted"]) for x in rows] == [int(r > 1) for r in ratios]
+    assert [int(x["overturned"]) for x in rows] == [int(r > 1) for r in ratios]
 
 
 @pytest.mark.parametrize(

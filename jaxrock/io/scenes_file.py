@@ -57,7 +57,7 @@ import numpy as np
 
 from .._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
 from ..excitation import Record
-from ..geometry import Block, pulse_of_ratios
+from ..geometry import G, Block, pulse_of_ratios
 from ..scene import (CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA, DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, MODEL_PARAMETERS, PULSES,
                      RECORD_ALIASES, TAN_ALPHA_MIN, is_builtin_record, model_kinds, parameter_table, parameters, pulse_class, takes)
 from ..results import RESULT_COLUMNS, summary_doc
@@ -205,6 +205,23 @@ class Scenes:
         block = jax.vmap(Block.from_slenderness)(p["height"], p["tan_alpha"], p["tan_alpha_base"])
         takes = {k: p[k] for k in MODEL_KINDS[kind].parameters if k in MODEL_PARAMETERS}
         return jax.vmap(lambda b, kw: scene_model(kind, b, **kw))(block, takes)
+
+    def intensity(self, idx) -> np.ndarray:
+        """Per row of `idx`: its excitation's peak |üg| over the block's uplift level g tanα′
+        (eq. 26), the batch engine's measure of a scene's difficulty: below 1 a rigid body stays
+        at rest, near 1 it chatters, far above it it soon overturns."""
+        idx = np.asarray(idx, dtype=int)
+        peaks: dict[int, float] = {}  # a record's peak |acc|, once per record (rows share them)
+
+        def peak(i):
+            rec = self.records[i]
+            if rec is None:
+                return abs(self.params["a_p"][i])
+            if id(rec) not in peaks:
+                peaks[id(rec)] = float(np.max(np.abs(np.asarray(rec.acc))))
+            return abs(self.params["scale"][i]) * peaks[id(rec)]
+
+        return np.array([peak(i) for i in idx], dtype=float) / (G * self.params["tan_alpha_base"][idx])
 
     def excitation(self, exc: str, idx) -> object:
         """The stacked excitations of rows `idx` (all of excitation kind `exc`)."""
