@@ -10,6 +10,7 @@ from __future__ import annotations
 import itertools
 import math
 
+import diffrax
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -450,6 +451,21 @@ def test_agrees_with_scipy_on_hard_spectrum_cells(run1, accel, ratio):
     # time 1.2 s later moves by 0.01 s. The 1e-6 agreement is therefore checked at the reference's
     # own tolerance, rtol 1e-12, where it holds for every cell; the default is checked above.
     _assert_agree(run1(m, jr.RickerPulse(a_p, w_p), TIGHT), ref, f"spectrum cell a={accel:.4f} w={ratio:.4f}")
+
+
+@pytest.mark.parametrize("solver", [diffrax.Tsit5, diffrax.Dopri8])
+def test_a_dip_across_zero_after_a_tiny_apex_is_not_stepped_over(run1, solver):
+    """Benchmark cell a_p/(g tanα) = 2.3095, ω_p/p = 7.2222: after an apex at θ = −8e-6 α the body
+    crosses θ = 0 and lands again 8 ms later (two impacts). A fresh segment's first step of h_nom
+    (42 ms) held the whole dip, so the impact event saw sθ > 0 at both ends: Dopri8 at rtol 1e-8
+    lost both impacts with status ok and max θ/α 9.3e-4 off. A fresh segment's steps now stay below
+    a quarter of its flight's time scale."""
+    m = model(10.0, 0.2)
+    a_p, w_p = 2.3095238095238093 * G * 0.2, 7.222222222222221 * float(m.block.p_r)
+    ref = sr.solve_pulse(m.block, a_p, w_p)
+    s = run1(m, jr.RickerPulse(a_p, w_p), jr.EventIntegrator(solver=solver(), rtol=1e-8, atol=1e-10))
+    assert int(s.n_impacts) == ref.n_impacts
+    _assert_agree(s, ref, f"{solver.__name__} rtol 1e-8")
 
 
 # El Centro (4000 samples, 0.01 s): (2h, tanα, scale). The (10, 0.15, 1.0) scene once failed
