@@ -227,10 +227,9 @@ def tolerance_study(grid=32, rtols=(1e-8, 1e-9, 1e-10)):
     """The default solver's error at several rtol on other pulse families (a grid × grid spectrum
     each, ω_p/p 1-15, a_p/(g tanα) 0.5-10), against Dopri8 at rtol 1e-13: max, 99th percentile and
     median of |Δθ/α| and the cells off by more than 1e-6, so that the default tolerance is chosen on
-    more than one scene. A cell off by the same amount at every rtol is not a tolerance's error: in
-    the tanα 0.3, 2h 30 m family one cell (a_p/(g tanα) 2.34, ω_p/p 3.26) has an impact at
-    θ̇ ~ 2e-4 rad/s while |üg| is 1.07 g tanα, and whether the body stays on its new side or falls
-    back flips with rounding (SciPy at rtol 1e-10 and 1e-12 also disagree there, by the same 4e-4)."""
+    more than one scene. (One cell of the tanα 0.3, 2h 30 m family, a_p/(g tanα) 2.34, ω_p/p 3.26,
+    was off by 4e-4 at every rtol until 46eeea8: one step held a crossing of θ = 0 and the return
+    from it, as SciPy's DOP853 still does at rtol 1e-10.)"""
     out("")
     out(f"the default solver's error on other pulse families ({grid}x{grid} each, against Dopri8 rtol 1e-13):")
     out(f"{'family':<34} {'rtol':>7} {'max err':>9} {'99th pct':>9} {'median':>9} {'cells > 1e-6':>12}")
