@@ -214,9 +214,10 @@ def block_10m(a_p, ratio=None, omega_p=None, base=1.0, eta=None):
 
 def test_rigid_gradients_match_central_differences_at_the_default_integrator():
     """Reverse mode at the default integrator against central differences (step 1e-5 relative:
-    truncation ~1e-10, solver noise ~rtol/step = 1e-5 at worst, measured ≤ 8e-8), for all six
+    truncation ~1e-10, solver noise ~rtol/step = 1e-3 at worst, measured ≤ 3e-7), for all six
     parameters and all three outputs, on rocking scenes (one with an extended base, one undamped)
-    and overturning ones (t_overturn). Measured agreement ≤ 7.5e-8 relative."""
+    and overturning ones (t_overturn). Measured agreement ≤ 2.9e-7 relative at the default rtol 1e-8
+    (7.5e-8 at rtol 1e-10)."""
     x = np.array(
         [
             block_10m(3.0, omega_p=2 * np.pi),
