@@ -252,13 +252,14 @@ class RigidStepper(AbstractStepper):
         acc0 = model.acceleration(c.t, c.theta, c.side, exc)
         at_zero = c.theta == 0
         dt_min = self._min_step(sc, c.t)
-        dt_flight = 0.05 * jnp.abs(c.theta_dot) / jnp.maximum(jnp.abs(acc0), tiny)
-        # A fresh segment's steps stay below a quarter of its flight's time scale (from θ = 0: the
-        # flight 2|θ̇|/|θ̈|; from an apex: the fall √(2|θ|/|θ̈|)), so that no step holds a crossing
-        # of θ = 0 and the return from it (the impact event sees sθ of one sign at both ends: a
-        # 42 ms step over an 8 ms dip after a tiny apex lost two impacts).
-        t_flight = jnp.where(at_zero, 2 * jnp.abs(c.theta_dot) / jnp.maximum(jnp.abs(acc0), tiny),
-                             jnp.sqrt(2 * jnp.abs(c.theta) / jnp.maximum(jnp.abs(acc0), tiny)))
+        # The flight's time scale: from θ = 0 its duration 2|θ̇|/|θ̈|, from an apex its fall √(2|θ|/|θ̈|).
+        # A fresh segment's first step off θ = 0 is a fortieth of it (`dt_flight`), and its steps stay
+        # below a quarter of it, so that no step holds a crossing of θ = 0 and the return from it (the
+        # impact event sees sθ of one sign at both ends: a 42 ms step over an 8 ms dip after a tiny
+        # apex lost two impacts).
+        acc_abs = jnp.maximum(jnp.abs(acc0), tiny)
+        t_flight = jnp.where(at_zero, 2 * jnp.abs(c.theta_dot) / acc_abs, jnp.sqrt(2 * jnp.abs(c.theta) / acc_abs))
+        dt_flight = 0.05 * jnp.abs(c.theta_dot) / acc_abs
         fresh_segment = (c.dt_next == 0) & ((c.theta != 0) | (c.theta_dot != 0))
         dtmax = jax.lax.stop_gradient(jnp.where(fresh_segment, jnp.clip(0.25 * t_flight, dt_min, exc.max_step), exc.max_step))
         term, event, controller = self._diffrax_parts(sc, exc, dtmax)
@@ -366,7 +367,8 @@ class RigidStepper(AbstractStepper):
         return out
 
     def _diffrax_parts(self, sc: _Scene, exc: AbstractExcitation, dtmax):
-        """The rocking equation's term, its three events and the step-size controller."""
+        """The rocking equation's term, its three events and the step-size controller (steps of at
+        most `dtmax`)."""
         model, integ, threshold, alpha = self.model, self.integrator, sc.threshold, sc.alpha
 
         def vf(t, y, args):
