@@ -180,7 +180,11 @@ class FirstStepController(diffrax.AbstractAdaptiveStepSizeController):
     with a host callback in its persistent compilation cache (`jaxrock.cache`). jaxrock's solves
     run forward by construction (t1 ≥ t0, dt0 > 0), so the check never fired; this controller
     hands the same first step to the wrapped controller's `init` (the same numbers, bit for bit)
-    and leaves the check out."""
+    and leaves the check out.
+
+    Its state carries the step the wrapped controller proposes next (`next_step`): a solve cut off
+    after some steps (`max_steps`) goes on where it stopped when the next solve starts from its
+    last state with that step (`SaveAt(controller_state=True)`)."""
 
     controller: diffrax.AbstractAdaptiveStepSizeController
     dt0: Float[Array, ""]
@@ -202,10 +206,18 @@ class FirstStepController(diffrax.AbstractAdaptiveStepSizeController):
 
     def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
         del dt0  # None: diffeqsolve was given no first step
-        return self.controller.init(terms, t0, t1, y0, self.dt0, args, func, error_order)
+        tnext, state = self.controller.init(terms, t0, t1, y0, self.dt0, args, func, error_order)
+        return tnext, (state, tnext - t0)
 
-    def adapt_step_size(self, *args, **kwargs):
-        return self.controller.adapt_step_size(*args, **kwargs)
+    def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state):
+        keep, next_t0, next_t1, jump, state, result = self.controller.adapt_step_size(
+            t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state[0])
+        return keep, next_t0, next_t1, jump, (state, next_t1 - next_t0), result
+
+    @staticmethod
+    def next_step(controller_state):
+        """The step proposed after a solve's last step, from its saved controller state."""
+        return controller_state[1]
 
 
 class AbstractModel(eqx.Module):

@@ -4,9 +4,10 @@ control with a component-scaled absolute tolerance (`SpringSystem.atol_scale`); 
 ``|θ| ≥ threshold·α′`` is an event. The peak and the uplift come from the accepted steps
 (`jaxrock.bookkeeping.Watch.steps`).
 
-A summary runs in two solves: the excitation window, then free motion until the answer is fixed —
+A summary runs in two phases: the excitation window, then free motion until the answer is fixed —
 the mechanical energy below the potential at the largest rotation seen so far
-(`SpringSystem.settled`, an event), overturned, or the run's end (`SpringModel.run_end`)."""
+(`SpringSystem.settled`, an event), overturned, or the run's end (`SpringModel.run_end`); in a batch,
+each phase in pieces of a bounded number of steps (`DiffraxSpringStepper`)."""
 
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ from .. import _linalg
 from .._validate import JaxrockInputError
 from ..bookkeeping import Record
 from ..excitation import AbstractExcitation
-from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, check_autodiff, diffrax_adjoint, diffrax_status
+from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
 from .system import SpringSystem
 
@@ -48,6 +49,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
     atol: float = eqx.field(static=True, default=1e-6)
     solver: str = eqx.field(static=True, default="kvaerno5")
     max_steps: int = eqx.field(static=True, default=20_000)
+    chunk_steps: int = eqx.field(static=True, default=128)  # a summary's steps per piece in a batch (`DiffraxSpringStepper`)
     root_finder: str = eqx.field(static=True, default="newton")
     autodiff: str = eqx.field(static=True, default="reverse")  # or "forward": see model.diffrax_adjoint
 
@@ -61,6 +63,8 @@ class SpringIntegrator(AbstractSpringIntegrator):
             raise JaxrockInputError(f"root_finder = {self.root_finder!r}; valid: ('newton', 'chord')")
         if self.max_steps < 16:
             raise JaxrockInputError(f"max_steps = {self.max_steps}: must be >= 16")
+        if self.chunk_steps < 16:
+            raise JaxrockInputError(f"chunk_steps = {self.chunk_steps}: must be >= 16")
 
     def stepper(self, model, system, save=None, t1=None) -> DiffraxSpringStepper:
         """`AbstractSpringIntegrator.stepper`: the whole run in diffrax's loop."""
@@ -113,13 +117,18 @@ class SpringIntegrator(AbstractSpringIntegrator):
         saveat: diffrax.SaveAt | None = None,
         *,
         dtmax=None,
+        dt0=None,
+        max_steps: int | None = None,
         throw: bool = False,
     ) -> diffrax.Solution:
         """One `diffrax.diffeqsolve` of the model's first-order equations from (t0, y0) to t1.
 
         `model` may be a `SpringModel` (its system is assembled here) or an assembled
         `SpringSystem` (`SpringModel.system()`), reused across calls. `dtmax` defaults to the excitation's
-        `max_step` while t < t_end. Never throws by default (`throw=False`): inspect `result`.
+        `max_step` while t < t_end; `dt0`, the first step, to `first_step`; `max_steps` to the
+        integrator's. Never throws by default (`throw=False`): inspect `result`. The step the
+        controller proposes after the last one is `FirstStepController.next_step` of the
+        solution's `controller_state` (asked with `SaveAt(controller_state=True)`).
         """
         system = model if isinstance(model, SpringSystem) else model.system()
         if saveat is None:
@@ -128,8 +137,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
             dtmax = excitation.max_step
         term = diffrax.ODETerm(lambda t, y, args: args[0].vector_field(t, y, args[1]))
         t0 = jnp.asarray(t0, dtype=float)
-        dt0 = jnp.minimum(1e-3 / system.p_r, 0.5 * dtmax) if dtmax is not None else 1e-3 / system.p_r
-        dt0 = jnp.asarray(dt0, dtype=float)
+        dt0 = jnp.asarray(first_step(system, dtmax) if dt0 is None else dt0, dtype=float)
         sol = diffrax.diffeqsolve(
             term,
             self.diffrax_solver(),
@@ -141,7 +149,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
             saveat=saveat,
             stepsize_controller=FirstStepController(self.controller(system, excitation, dtmax), dt0),
             event=event,
-            max_steps=self.max_steps,
+            max_steps=self.max_steps if max_steps is None else max_steps,
             adjoint=diffrax_adjoint(self.autodiff),
             throw=throw,
         )
@@ -151,11 +159,38 @@ class SpringIntegrator(AbstractSpringIntegrator):
         return eqx.tree_at(lambda s: s.result, sol, diffrax.RESULTS.where(t1 < t0, diffrax.RESULTS.internal_error, sol.result))
 
 
+def first_step(system: SpringSystem, dtmax=None):
+    """A solve's first step: a thousandth of the rocking time scale 1/p′, and at most half of `dtmax`."""
+    return 1e-3 / system.p_r if dtmax is None else jnp.minimum(1e-3 / system.p_r, 0.5 * dtmax)
+
+
+_WINDOW, _FREE, _FINISHED = 0, 1, 2  # a summary's phases
+
+
+class _Carry(eqx.Module):
+    """A summary run between its pieces (`DiffraxSpringStepper`)."""
+
+    phase: Array  # _WINDOW: the excitation window; _FREE: free motion until the answer is fixed; _FINISHED
+    t: Array
+    y: Array
+    dt: Array  # the step the next piece starts with: the controller's proposal after the last one
+    steps: Array  # steps taken in this phase (its bound: the integrator's max_steps)
+    n_steps: Array  # steps taken in all
+    rec: Record
+    status: Status
+    e_settle: Array  # free motion stops below this mechanical energy (`SpringSystem.settle_energy`)
+
+
 class DiffraxSpringStepper(AbstractStepper):
-    """A spring-model run by `SpringIntegrator`: diffrax's `diffeqsolve` runs its own loop, so the
-    whole run is done in `init` (`max_steps = 0`; the state is the `Solution`). A summary runs in two
-    solves: the excitation window, then free motion until the answer is fixed (module docstring);
-    a history is one solve with the peak from the steps' Hermite interpolants."""
+    """A spring-model run by `SpringIntegrator`.
+
+    A summary runs in two phases (module docstring), each as `diffrax.diffeqsolve`s of at most
+    `SpringIntegrator.chunk_steps` steps (`step`): a piece cut off by its bound goes on from its
+    last state with the step its controller proposed next, so that the pieces take the steps one
+    solve would. The batch engine advances a batch a few pieces at a time and gathers the cells still
+    running between passes (`schedule`): a cell whose spring rings for a long pulse no longer holds
+    the whole batch. `solve` (`simulate`, and derivatives through it) runs each phase as one piece.
+    A history is one solve with the peak from the steps' Hermite interpolants."""
 
     integrator: "SpringIntegrator"
     model: "SpringModel"
@@ -165,96 +200,128 @@ class DiffraxSpringStepper(AbstractStepper):
 
     @property
     def max_steps(self) -> int:
-        return 0
+        # pieces: both phases' step bounds in pieces, and the phase switch
+        return 2 * (-(-self.integrator.max_steps // self.integrator.chunk_steps)) + 2
 
     @property
     def checkpointed(self) -> bool:
         return True
 
-    def step(self, excitation, state):
-        return state
+    @property
+    def schedule(self) -> Schedule:
+        return Schedule(passes=(2, 4, 8), smallest_batch=64) if self.save is None else Schedule()
 
-    def done(self, state):
-        return jnp.asarray(True)
-
-    def finish(self, excitation, state) -> Solution:
-        return state
-
-    def init(self, excitation) -> Solution:
-        model, system, save, t1 = self.model, self.system, self.save, self.t1
-        watch = model.watch(system)
+    def init(self, excitation) -> _Carry:
+        system = self.system
         y0 = system.initial_state()
-        t_start = excitation.t_start
-        t_end = excitation.t_end
+        zero = jnp.zeros((), jnp.int32)
+        return _Carry(phase=zero + _WINDOW, t=jnp.asarray(excitation.t_start, dtype=y0.dtype), y=y0,
+                      dt=jnp.asarray(first_step(system, excitation.max_step), dtype=y0.dtype), steps=zero, n_steps=zero,
+                      rec=Record.start(), status=Status.ok,
+                      e_settle=jnp.zeros((), y0.dtype))
+
+    def step(self, excitation, c: _Carry) -> _Carry:
+        return self._piece(excitation, c, self.integrator.chunk_steps)
+
+    def done(self, c: _Carry):
+        return c.phase == _FINISHED
+
+    def finish(self, excitation, c: _Carry) -> Solution:
+        status = Status.where(c.phase == _FINISHED, c.status, Status.max_iterations)
+        return self.model.watch(self.system).solution(c.rec, status, n_iterations=c.n_steps)
+
+    def solve(self, excitation) -> Solution:
+        if self.save is not None:
+            return self._history(excitation)
+        c = self.init(excitation)
+        for _ in (_WINDOW, _FREE):  # each phase in one piece: no loop around diffrax's own
+            c = self._piece(excitation, c, self.integrator.max_steps)
+        return self.finish(excitation, c)
+
+    def _piece(self, excitation, c: _Carry, max_steps: int) -> _Carry:
+        """At most `max_steps` more steps of the phase `c` is in; on to the next phase where it ends."""
+        model, system, integ = self.model, self.system, self.integrator
+        watch = model.watch(system)
         N = system.ndof
-        step_fn = lambda t, y, args: (y[0], y[N])
-        root = optx.Newton(rtol=1e-10, atol=1e-12 * model.block.alpha_r)
-        over_fn = lambda t, y, args, **kw: watch.overturn - jnp.abs(y[0])  # never for a fixed base
-        # an event that ended a solve located the overturning (its peak reached the level, to the
-        # root finder's tolerance); the last step end is the event's time
-        last = lambda ts: jnp.max(jnp.where(jnp.isfinite(ts), ts, -jnp.inf))
-        located = lambda sol, rec: (sol.result == diffrax.RESULTS.event_occurred) & (rec.peak >= watch.overturn * (1 - 1e-6))
+        free, running = c.phase == _FREE, c.phase != _FINISHED
+        t_stop = model.run_end(system, excitation, None, self.t1)
+        t_end = jnp.where(free, t_stop, excitation.t_end)
+        # a finished run still traces its piece (under vmap every lane does), over a vanishing interval
+        t_end = jnp.where(running, jnp.maximum(t_end, c.t), c.t + 1e-9)
+        e_settle = c.e_settle
 
-        if save is not None:
-            t_final = model.run_end(system, excitation, save, t1)
-            # Save times before the excitation starts hold the initial state (the ground is still):
-            # diffrax saves only within [t0, t1] (`simulate` refuses times beyond t1; earlier ones are clipped)
-            ts = jnp.clip(save.ts, t_start, t_final)
-            sub_hist = diffrax.SubSaveAt(ts=ts, fn=lambda t, y, args: system.history(t, y, args[1], save.fields))
-            sub_steps = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
-            sol = self.integrator.solve(
-                system, excitation, y0, t_start, t_final,
-                event=diffrax.Event(over_fn, root_finder=root),
-                saveat=diffrax.SaveAt(subs=[sub_hist, sub_steps]),
-            )
-            hist, (th, om) = sol.ys
-            rec = watch.steps(sol.ts[1], th, om)
-            rec = rec.overturn_located(located(sol, rec), last(sol.ts[1]))
-            return watch.solution(rec, diffrax_status(sol.result), ts=save.ts, history=hist)
-
-        # phase 1: the excitation window
-        sub = diffrax.SubSaveAt(steps=True, t0=True, fn=step_fn)
-        sol1 = self.integrator.solve(
-            system, excitation, y0, t_start, t_end,
-            event=diffrax.Event(over_fn, root_finder=root),
-            saveat=diffrax.SaveAt(subs=[sub, diffrax.SubSaveAt(t1=True)]),
-        )
-        (th1, om1), y_end = sol1.ys
-        y_end = y_end[-1]
-        rec1 = watch.steps(sol1.ts[0], th1, om1)
-        st1 = diffrax_status(sol1.result)
-        over1 = (sol1.result == diffrax.RESULTS.event_occurred) & (st1 == Status.ok)
-        t_start2 = sol1.ts[1][-1]
-        t_start2 = jnp.where(jnp.isfinite(t_start2), t_start2, t_end)
-        rec1 = rec1.overturn_located(over1, t_start2)
-        # phase 2: free motion until the answer is fixed
-        t_stop = model.run_end(system, excitation, None, t1)
-        e_settle = system.settle_energy(rec1.peak)  # the peak is fixed during phase 2: computed once
+        def over_fn(t, y, args, **kw):
+            return watch.overturn - jnp.abs(y[0])  # never for a fixed base
 
         def settled(t, y, args, **kw):
-            return args[0].mechanical_energy(y) < e_settle
+            return free & (args[0].mechanical_energy(y) < e_settle)
 
-        y_end = jnp.where(jnp.all(jnp.isfinite(y_end)), y_end, y0)
-        # an overturned (or failed) phase 1 still runs phase 2 formally, over a vanishing interval
-        done = over1 | (st1 != Status.ok)
-        t_stop = jnp.where(done, t_start2 + 1e-9, t_stop)
-        sol2 = self.integrator.solve(
-            system, excitation, y_end, t_start2, t_stop,
-            event=diffrax.Event((over_fn, settled), root_finder=root),
-            saveat=diffrax.SaveAt(steps=True, fn=step_fn),
-            dtmax=jnp.inf,
+        sol = integ.solve(
+            system, excitation, c.y, c.t, t_end,
+            event=diffrax.Event((over_fn, settled), root_finder=optx.Newton(rtol=1e-10, atol=1e-12 * model.block.alpha_r)),
+            saveat=diffrax.SaveAt(steps=True, t0=True, controller_state=True),
+            dtmax=jnp.where(free, jnp.inf, excitation.max_step),
+            dt0=c.dt,
+            max_steps=max_steps,
         )
-        th2, om2 = sol2.ys
-        # join: the last phase-1 point starts phase 2
-        ts2 = jnp.concatenate([jnp.atleast_1d(t_start2), sol2.ts])
-        th2 = jnp.concatenate([jnp.atleast_1d(y_end[0]), th2])
-        om2 = jnp.concatenate([jnp.atleast_1d(y_end[N]), om2])
-        over2 = (~done) & (sol2.result == diffrax.RESULTS.event_occurred) & sol2.event_mask[0]
-        rec2 = watch.steps(ts2, th2, om2).overturn_located(over2, last(ts2))
-        rec = rec1.merge(jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), Record.start(), rec2))
-        status = _worse(st1, Status.where(done, Status.ok, diffrax_status(sol2.result)))
-        return watch.solution(rec, status)
+        # The piece's last state is its last accepted step, or the event it ended on (`num_accepted_steps`
+        # entries after the start). diffrax appends its final value to the saved steps, and under vmap,
+        # where another lane's event makes every lane locate one, a lane without an event gets the
+        # end of its last *attempted* step there: a rejected one's, for a lane cut off by max_steps.
+        n_acc = sol.stats["num_accepted_steps"]
+        valid = jnp.arange(sol.ts.shape[0]) <= n_acc
+        ts = jnp.where(valid, sol.ts, jnp.inf)
+        t_last, y_last = sol.ts[n_acc], sol.ys[n_acc]
+        th, om = jnp.where(valid, sol.ys[:, 0], jnp.inf), jnp.where(valid, sol.ys[:, N], jnp.inf)
+        event = sol.result == diffrax.RESULTS.event_occurred
+        cut = sol.result == diffrax.RESULTS.max_steps_reached
+        steps = c.steps + sol.stats["num_steps"]
+        # an event that ended the piece located the overturning (or the rest); its time is the last step end
+        over = event & sol.event_mask[0]
+        rec = c.rec.merge(watch.steps(ts, th, om).overturn_located(over, t_last))
+        status = diffrax_status(sol.result)
+        go_on = cut & (steps < integ.max_steps)  # a piece cut off by its own bound, not the phase's
+        status = Status.where(go_on, Status.ok, status)
+        ended = event | (status != Status.ok) | free  # the window ends in the free motion's phase
+        phase = jnp.where(go_on, c.phase, jnp.where(ended, _FINISHED, _FREE))
+        switch = (phase == _FREE) & ~free
+        phase = jnp.where(running, phase, c.phase)
+        keep = lambda new, old: jnp.where(running, new, old)
+        y = jnp.where(jnp.all(jnp.isfinite(y_last)), y_last, c.y)
+        dt = jnp.where(switch, first_step(system), FirstStepController.next_step(sol.controller_state))
+        return _Carry(
+            phase=phase,
+            t=keep(t_last, c.t),
+            y=keep(y, c.y),
+            dt=keep(dt, c.dt),
+            steps=keep(jnp.where(switch, 0, steps), c.steps),
+            n_steps=keep(c.n_steps + sol.stats["num_steps"], c.n_steps),
+            rec=jax.tree_util.tree_map(keep, rec, c.rec),
+            status=Status.where(running, status, c.status),
+            # the peak of the window is the free motion's: computed once
+            e_settle=jnp.where(switch, system.settle_energy(rec.peak), c.e_settle),
+        )
 
-
-def _worse(s1: Status, s2: Status) -> Status:
-    return Status.where(s1 == Status.ok, s2, s1)
+    def _history(self, excitation) -> Solution:
+        """A history: one solve to the run's end, saved at `save.ts`."""
+        model, system, save, t1 = self.model, self.system, self.save, self.t1
+        watch = model.watch(system)
+        N = system.ndof
+        t_final = model.run_end(system, excitation, save, t1)
+        # Save times before the excitation starts hold the initial state (the ground is still):
+        # diffrax saves only within [t0, t1] (`simulate` refuses times beyond t1; earlier ones are clipped)
+        ts = jnp.clip(save.ts, excitation.t_start, t_final)
+        sub_hist = diffrax.SubSaveAt(ts=ts, fn=lambda t, y, args: system.history(t, y, args[1], save.fields))
+        sub_steps = diffrax.SubSaveAt(steps=True, t0=True, fn=lambda t, y, args: (y[0], y[N]))
+        over_fn = lambda t, y, args, **kw: watch.overturn - jnp.abs(y[0])
+        sol = self.integrator.solve(
+            system, excitation, system.initial_state(), excitation.t_start, t_final,
+            event=diffrax.Event(over_fn, root_finder=optx.Newton(rtol=1e-10, atol=1e-12 * model.block.alpha_r)),
+            saveat=diffrax.SaveAt(subs=[sub_hist, sub_steps]),
+        )
+        hist, (th, om) = sol.ys
+        rec = watch.steps(sol.ts[1], th, om)
+        located = (sol.result == diffrax.RESULTS.event_occurred) & (rec.peak >= watch.overturn * (1 - 1e-6))
+        last = jnp.max(jnp.where(jnp.isfinite(sol.ts[1]), sol.ts[1], -jnp.inf))
+        rec = rec.overturn_located(located, last)
+        return watch.solution(rec, diffrax_status(sol.result), ts=save.ts, history=hist)
