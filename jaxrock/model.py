@@ -182,12 +182,15 @@ class FirstStepController(diffrax.AbstractAdaptiveStepSizeController):
     hands the same first step to the wrapped controller's `init` (the same numbers, bit for bit)
     and leaves the check out.
 
-    Its state carries the step the wrapped controller proposes next (`next_step`): a solve cut off
-    after some steps (`max_steps`) goes on where it stopped when the next solve starts from its
-    last state with that step (`SaveAt(controller_state=True)`)."""
+    Its state carries the end of the step the wrapped controller proposes next (`next_time`): a
+    solve cut off after some steps (`max_steps`) goes on where it stopped when the next solve starts
+    from its last state with `t_next` that end (`SaveAt(controller_state=True)`); exactly that
+    time, not t0 + (t_next − t0), which can round an ulp below a step the controller clipped to a
+    sample of a record (and the next step would then be an ulp long)."""
 
     controller: diffrax.AbstractAdaptiveStepSizeController
     dt0: Float[Array, ""]
+    t_next: Float[Array, ""] | None = None  # the first step's end for a solve that goes on (+inf: start afresh from dt0)
 
     @property
     def rtol(self):
@@ -202,21 +205,23 @@ class FirstStepController(diffrax.AbstractAdaptiveStepSizeController):
         return self.controller.norm
 
     def wrap(self, direction):
-        return FirstStepController(self.controller.wrap(direction), self.dt0 * direction)
+        return FirstStepController(self.controller.wrap(direction), self.dt0 * direction, self.t_next)
 
     def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
         del dt0  # None: diffeqsolve was given no first step
         tnext, state = self.controller.init(terms, t0, t1, y0, self.dt0, args, func, error_order)
-        return tnext, (state, tnext - t0)
+        if self.t_next is not None:
+            tnext = jnp.where(jnp.isfinite(self.t_next), self.t_next, tnext)
+        return tnext, (state, tnext)
 
     def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state):
         keep, next_t0, next_t1, jump, state, result = self.controller.adapt_step_size(
             t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state[0])
-        return keep, next_t0, next_t1, jump, (state, next_t1 - next_t0), result
+        return keep, next_t0, next_t1, jump, (state, next_t1), result
 
     @staticmethod
-    def next_step(controller_state):
-        """The step proposed after a solve's last step, from its saved controller state."""
+    def next_time(controller_state):
+        """The end of the step proposed after a solve's last step, from its saved controller state."""
         return controller_state[1]
 
 

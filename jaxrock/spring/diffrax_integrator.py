@@ -117,7 +117,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
         saveat: diffrax.SaveAt | None = None,
         *,
         dtmax=None,
-        dt0=None,
+        t_next=None,
         max_steps: int | None = None,
         throw: bool = False,
     ) -> diffrax.Solution:
@@ -125,10 +125,11 @@ class SpringIntegrator(AbstractSpringIntegrator):
 
         `model` may be a `SpringModel` (its system is assembled here) or an assembled
         `SpringSystem` (`SpringModel.system()`), reused across calls. `dtmax` defaults to the excitation's
-        `max_step` while t < t_end; `dt0`, the first step, to `first_step`; `max_steps` to the
-        integrator's. Never throws by default (`throw=False`): inspect `result`. The step the
-        controller proposes after the last one is `FirstStepController.next_step` of the
-        solution's `controller_state` (asked with `SaveAt(controller_state=True)`).
+        `max_step` while t < t_end; `max_steps` to the integrator's; the first step is `first_step`.
+        A solve that goes on from an earlier one's last state takes as `t_next` the end
+        of the step it proposed next, `FirstStepController.next_time` of its `controller_state`
+        (asked with `SaveAt(controller_state=True)`). Never throws by default (`throw=False`):
+        inspect `result`.
         """
         system = model if isinstance(model, SpringSystem) else model.system()
         if saveat is None:
@@ -137,7 +138,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
             dtmax = excitation.max_step
         term = diffrax.ODETerm(lambda t, y, args: args[0].vector_field(t, y, args[1]))
         t0 = jnp.asarray(t0, dtype=float)
-        dt0 = jnp.asarray(first_step(system, dtmax) if dt0 is None else dt0, dtype=float)
+        dt0 = jnp.asarray(first_step(system, dtmax), dtype=float)
         sol = diffrax.diffeqsolve(
             term,
             self.diffrax_solver(),
@@ -147,7 +148,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
             y0,
             args=(system, excitation),
             saveat=saveat,
-            stepsize_controller=FirstStepController(self.controller(system, excitation, dtmax), dt0),
+            stepsize_controller=FirstStepController(self.controller(system, excitation, dtmax), dt0, t_next),
             event=event,
             max_steps=self.max_steps if max_steps is None else max_steps,
             adjoint=diffrax_adjoint(self.autodiff),
@@ -173,7 +174,7 @@ class _Carry(eqx.Module):
     phase: Array  # _WINDOW: the excitation window; _FREE: free motion until the answer is fixed; _FINISHED
     t: Array
     y: Array
-    dt: Array  # the step the next piece starts with: the controller's proposal after the last one
+    t_next: Array  # the end of the next piece's first step: the controller's proposal (+inf: a fresh start)
     steps: Array  # steps taken in this phase (its bound: the integrator's max_steps)
     n_steps: Array  # steps taken in all
     rec: Record
@@ -209,14 +210,14 @@ class DiffraxSpringStepper(AbstractStepper):
 
     @property
     def schedule(self) -> Schedule:
-        return Schedule(passes=(2, 4, 8), smallest_batch=64) if self.save is None else Schedule()
+        return Schedule(passes=(4, 4, 8), smallest_batch=64) if self.save is None else Schedule()
 
     def init(self, excitation) -> _Carry:
         system = self.system
         y0 = system.initial_state()
         zero = jnp.zeros((), jnp.int32)
         return _Carry(phase=zero + _WINDOW, t=jnp.asarray(excitation.t_start, dtype=y0.dtype), y=y0,
-                      dt=jnp.asarray(first_step(system, excitation.max_step), dtype=y0.dtype), steps=zero, n_steps=zero,
+                      t_next=jnp.asarray(jnp.inf, dtype=y0.dtype), steps=zero, n_steps=zero,
                       rec=Record.start(), status=Status.ok,
                       e_settle=jnp.zeros((), y0.dtype))
 
@@ -249,6 +250,7 @@ class DiffraxSpringStepper(AbstractStepper):
         # a finished run still traces its piece (under vmap every lane does), over a vanishing interval
         t_end = jnp.where(running, jnp.maximum(t_end, c.t), c.t + 1e-9)
         e_settle = c.e_settle
+        dtmax = jnp.where(free, jnp.inf, excitation.max_step)
 
         def over_fn(t, y, args, **kw):
             return watch.overturn - jnp.abs(y[0])  # never for a fixed base
@@ -260,8 +262,8 @@ class DiffraxSpringStepper(AbstractStepper):
             system, excitation, c.y, c.t, t_end,
             event=diffrax.Event((over_fn, settled), root_finder=optx.Newton(rtol=1e-10, atol=1e-12 * model.block.alpha_r)),
             saveat=diffrax.SaveAt(steps=True, t0=True, controller_state=True),
-            dtmax=jnp.where(free, jnp.inf, excitation.max_step),
-            dt0=c.dt,
+            dtmax=dtmax,
+            t_next=c.t_next,
             max_steps=max_steps,
         )
         # The piece's last state is its last accepted step, or the event it ended on (`num_accepted_steps`
@@ -288,12 +290,12 @@ class DiffraxSpringStepper(AbstractStepper):
         phase = jnp.where(running, phase, c.phase)
         keep = lambda new, old: jnp.where(running, new, old)
         y = jnp.where(jnp.all(jnp.isfinite(y_last)), y_last, c.y)
-        dt = jnp.where(switch, first_step(system), FirstStepController.next_step(sol.controller_state))
+        t_next = jnp.where(switch, jnp.inf, FirstStepController.next_time(sol.controller_state))
         return _Carry(
             phase=phase,
             t=keep(t_last, c.t),
             y=keep(y, c.y),
-            dt=keep(dt, c.dt),
+            t_next=keep(t_next, c.t_next),
             steps=keep(jnp.where(switch, 0, steps), c.steps),
             n_steps=keep(c.n_steps + sol.stats["num_steps"], c.n_steps),
             rec=jax.tree_util.tree_map(keep, rec, c.rec),
