@@ -67,7 +67,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
             raise JaxrockInputError(f"chunk_steps = {self.chunk_steps}: must be >= 16")
 
     def stepper(self, model, system, save=None, t1=None) -> DiffraxSpringStepper:
-        """`AbstractSpringIntegrator.stepper`: the whole run in diffrax's loop."""
+        """`AbstractSpringIntegrator.stepper`: a summary in pieces of diffrax solves, a history in one."""
         return DiffraxSpringStepper(self, model, system, save, t1)
 
     @property
@@ -252,15 +252,12 @@ class DiffraxSpringStepper(AbstractStepper):
         e_settle = c.e_settle
         dtmax = jnp.where(free, jnp.inf, excitation.max_step)
 
-        def over_fn(t, y, args, **kw):
-            return watch.overturn - jnp.abs(y[0])  # never for a fixed base
-
         def settled(t, y, args, **kw):
             return free & (args[0].mechanical_energy(y) < e_settle)
 
         sol = integ.solve(
             system, excitation, c.y, c.t, t_end,
-            event=diffrax.Event((over_fn, settled), root_finder=optx.Newton(rtol=1e-10, atol=1e-12 * model.block.alpha_r)),
+            event=self._events(watch, settled),
             saveat=diffrax.SaveAt(steps=True, t0=True, controller_state=True),
             dtmax=dtmax,
             t_next=c.t_next,
@@ -304,6 +301,15 @@ class DiffraxSpringStepper(AbstractStepper):
             e_settle=jnp.where(switch, system.settle_energy(rec.peak), c.e_settle),
         )
 
+    def _events(self, watch, *more) -> diffrax.Event:
+        """Overturning, |θ| reaching `watch.overturn` (never for a fixed base), first, then `more`;
+        located by Newton on the step's interpolant."""
+
+        def over_fn(t, y, args, **kw):
+            return watch.overturn - jnp.abs(y[0])
+
+        return diffrax.Event((over_fn, *more), root_finder=optx.Newton(rtol=1e-10, atol=1e-12 * self.model.block.alpha_r))
+
     def _history(self, excitation) -> Solution:
         """A history: one solve to the run's end, saved at `save.ts`."""
         model, system, save, t1 = self.model, self.system, self.save, self.t1
@@ -315,10 +321,9 @@ class DiffraxSpringStepper(AbstractStepper):
         ts = jnp.clip(save.ts, excitation.t_start, t_final)
         sub_hist = diffrax.SubSaveAt(ts=ts, fn=lambda t, y, args: system.history(t, y, args[1], save.fields))
         sub_steps = diffrax.SubSaveAt(steps=True, t0=True, fn=lambda t, y, args: (y[0], y[N]))
-        over_fn = lambda t, y, args, **kw: watch.overturn - jnp.abs(y[0])
         sol = self.integrator.solve(
             system, excitation, system.initial_state(), excitation.t_start, t_final,
-            event=diffrax.Event(over_fn, root_finder=optx.Newton(rtol=1e-10, atol=1e-12 * model.block.alpha_r)),
+            event=self._events(watch),
             saveat=diffrax.SaveAt(subs=[sub_hist, sub_steps]),
         )
         hist, (th, om) = sol.ys
