@@ -56,6 +56,16 @@ def test_scalar_solve_of_the_implicit_step_is_exact(bb):
         u = jax.vmap(lambda rr: bb.solve(rr, k))(r)
         res = u + k * bb.unit_moment(u) - r
         assert float(jnp.max(jnp.abs(res) / (1.0 + jnp.abs(r) + k))) < 1e-12, (k, res)
+    # k and r over fourteen decades, and r just around k (tanh's tail: u ~ ½ log 2k, where Newton
+    # from the pre-yield or yielded estimate climbs by ~½ per step): residual within 4 ulps of the
+    # equation's terms
+    k = jnp.logspace(-4, 10, 141)[:, None]
+    r = jnp.concatenate([jnp.logspace(-4, 10, 141)[None, :] + 0 * k, k + jnp.linspace(-10.0, 40.0, 101)[None, :]], axis=1)
+    k = k + 0 * r
+    u = jax.vmap(bb.solve)(r.ravel(), k.ravel())
+    res = u + k.ravel() * bb.unit_moment(u) - r.ravel()
+    scale = jnp.finfo(float).eps * (jnp.abs(r.ravel()) + k.ravel() + jnp.abs(u))
+    assert float(jnp.max(jnp.abs(res) / scale)) < 4.0
 
 
 def test_backbone_by_name_and_bad_names():

@@ -82,11 +82,42 @@ def strain_energy(q, h, n: int, EA, EI):
     return jnp.sum(0.5 * EA / L0 * e**2 + EI / L0 * 2 * (t1**2 + t1 * t2 + t2**2))
 
 
-def deformation_energy_rate_matrix(d_dot, h, n: int, EA, EI):
-    """ḋᵀ K_e ḋ summed over elements, as forces: returns K_e ḋ per deformation component."""
+def local_forces(d, h, n: int, EA, EI):
+    """K_e d per element: the axial force and the two end moments (N, M₁, M₂) = ∂U_e/∂d."""
     L0 = 2 * h / n
-    e, t1, t2 = d_dot
+    e, t1, t2 = d
     return EA / L0 * e, EI / L0 * (4 * t1 + 2 * t2), EI / L0 * (2 * t1 + 4 * t2)
+
+
+def internal_forces(q, v, h, n: int, EA, EI, a1):
+    """(∇U, a₁ Jᵀ K_e J v): the gradient of `strain_energy` and the Rayleigh force on the element
+    deformations, in closed form. d = (L − L₀, φ_i − β, φ_j − β) has the Jacobian J with
+    ∂L/∂(x_j, y_j) = (Δx, Δy)/L and ∂β/∂(x_j, y_j) = (Δy, −Δx)/L² (β = atan2(Δx, Δy); node i:
+    the negatives), so an element's local forces (N, M₁, M₂) act on its nodes as
+    ±(N Δx/L − (M₁ + M₂) Δy/L², N Δy/L + (M₁ + M₂) Δx/L²) and M₁, M₂ on φ_i, φ_j. The same as
+    `jax.grad(strain_energy)` and the transposed linearisation (tests/test_spring.py), without
+    the pads and splits of the autodiff transpose, which cost ~5× more under `vmap` on CPU."""
+    x, y, phi = positions(q, h, n)
+    vx, vy, vphi = positions(v, 0.0 * h, n)  # node velocities (no rest heights)
+    dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]
+    dvx, dvy = vx[1:] - vx[:-1], vy[1:] - vy[:-1]
+    L2 = dx**2 + dy**2
+    L = jnp.sqrt(L2)
+    beta = jnp.arctan2(dx, dy)
+    L_dot = (dx * dvx + dy * dvy) / L
+    beta_dot = (dy * dvx - dx * dvy) / L2
+    d = (L - 2 * h / n, phi[:-1] - beta, phi[1:] - beta)
+    d_dot = (L_dot, vphi[:-1] - beta_dot, vphi[1:] - beta_dot)
+    # both force sets at once: leading axis [elastic, damping]
+    N, M1, M2 = (jnp.stack([a, a1 * b]) for a, b in zip(local_forces(d, h, n, EA, EI), local_forces(d_dot, h, n, EA, EI)))
+    fx = N * dx / L - (M1 + M2) * dy / L2
+    fy = N * dy / L + (M1 + M2) * dx / L2
+    f_j = jnp.stack([fx, fy, M2], axis=-1)  # (2, n, 3): on the element's upper node j
+    f_i = jnp.stack([-fx, -fy, M1], axis=-1)  # on its lower node i
+    zero = jnp.zeros((2, 1, 3), q.dtype)
+    nodes = jnp.concatenate([f_i, zero], axis=1) + jnp.concatenate([zero, f_j], axis=1)  # (2, n + 1, 3)
+    f = jnp.concatenate([nodes[:, 0, 2:], nodes[:, 1:].reshape(2, -1)], axis=1)
+    return f[0], f[1]
 
 
 def gravity_potential(q, h, n: int, m):

@@ -132,17 +132,12 @@ class SpringSystem(eqx.Module):
         return self._column_forces(q, v)[1]
 
     def _column_forces(self, q, v):
-        """(−∇V_column, Rayleigh force) from one linearisation d(q) ≈ d + J δq of the element
-        deformations: the strain energy is ½ Σ dᵀ K_e d, so ∇U = Jᵀ K_e d, and the damping force
-        is a₁ Jᵀ K_e J v; the gravity force is constant (the potential is linear in the heights)."""
-        f = lambda qq: beam.element_deformations(qq, self.h, self.n)
-        d, jvp_fn = jax.linearize(f, q)
-        transpose = jax.linear_transpose(jvp_fn, q)
-        K_e = lambda x: beam.deformation_energy_rate_matrix(x, self.h, self.n, self.EA, self.EI)
-        (g_el,) = transpose(K_e(d))
-        (g_d,) = transpose(K_e(jvp_fn(v)))
+        """(−∇V_column, Rayleigh force a₁ Jᵀ K_e J v): the strain energy's gradient and the
+        deformation damping in closed form (`beam.internal_forces`); the gravity force is constant
+        (the potential is linear in the heights)."""
+        g_el, g_d = beam.internal_forces(q, v, self.h, self.n, self.EA, self.EI, self.a1)
         g_grav = jax.grad(beam.gravity_potential)(q, self.h, self.n, self.m)
-        return -(g_el + g_grav), self.a1 * g_d
+        return -(g_el + g_grav), g_d
 
     def forces(self, t, q, v, excitation):
         """(f_total, f_ext, f_damp, f_nospring): generalised forces [N, N·m]."""
