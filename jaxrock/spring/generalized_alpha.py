@@ -230,6 +230,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 ew=jnp.zeros(2, dtype),  # [dissipated, input] work
                 fd=f0_damp, fe=f0_ext,
                 rec=Record.start(q0[0]), done=jnp.asarray(False), failed=jnp.asarray(False),
+                rho=jnp.asarray(1.0, dtype),  # Newton's contraction, as last measured (unknown: 1)
                 steps=jnp.zeros((), jnp.int32), hist=hist0, ptr=jnp.sum(save_ts <= t0) if save_ts is not None else jnp.zeros((), jnp.int32),
                 Kinv=Kinv,
             )
@@ -245,25 +246,22 @@ class GeneralizedAlphaStepper(AbstractStepper):
             Ki = c["Kinv"][k]
             th_rot = q[0]
             apply = lambda r: mech.rotate(Ki @ mech.rotate(r, -th_rot), th_rot)
-            z = (1 - af) * apply(e0) * free
+            z = (1 - af) * mech.rotate(Ki[:, 0], th_rot) * free  # apply(e₀): the rotation keeps e₀
             z0 = z[0]
             acc_of = lambda q1: (q1 - q - dt * v - dt**2 * (0.5 - beta) * a) / (beta * dt**2)
             vel_of = lambda a1: v + dt * ((1 - gamma) * a + gamma * a1)
 
-            def residual_parts(q1):
+            def residual(q1):
                 a1 = acc_of(q1)
-                v1 = vel_of(a1)
-                fr, fe, fd = mech.forces_without_spring(t1, q1, v1, excitation)
-                R = M @ ((1 - am) * a1 + am * a) - (1 - af) * fr - af * f_tot
-                return R * free, (a1, v1, fr, fe, fd)
+                fr, _, _ = mech.forces_without_spring(t1, q1, vel_of(a1), excitation)
+                return (M @ ((1 - am) * a1 + am * a) - (1 - af) * fr - af * f_tot) * free
 
             def ncond(nc):
                 return (~nc[1]) & (nc[2] < ig.max_newton)
 
             def nbody(nc):
-                q1, _, i, _, r_prev = nc
-                R, aux = residual_parts(q1)
-                x = apply(R) * free
+                q1, _, i, r_prev, rho = nc
+                x = apply(residual(q1)) * free
                 th_new = solve_theta(q1[0] - x[0], z0) if not clamp else q1[0]
                 dq = -x - spring(th_new) * z
                 dq = dq.at[0].set(th_new - q1[0])
@@ -273,26 +271,28 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 # (Hairer & Wanner IV.8: typically ρ ~ 1e-4 here, so the third iteration a batch
                 # would wait for is not needed); or stalled (at the round-off floor of a stiff
                 # column's forces) while already below the tolerance
-                rate = r / r_prev  # 0 at the first iteration
-                contracted = jnp.isfinite(r_prev) & (rate < 0.5) & (rate / (1 - rate) * r <= ig.newton_tol)
+                rho = jnp.where(jnp.isfinite(r_prev), r / r_prev, rho)  # first iteration: the last step's
+                contracted = (rho < 0.5) & (rho / (1 - rho) * r <= ig.newton_tol)
                 conv = (r <= ig.newton_tol) | contracted | ((r <= 1.0) & (r >= 0.5 * r_prev))
                 conv = conv & jnp.isfinite(r)
-                return q1 + dq, conv, i + 1, aux, r
+                return q1 + dq, conv, i + 1, r, rho
 
             qp = q + dt * v + 0.5 * dt**2 * a
-            aux0 = (a, v, f_tot, f_tot, f_tot)  # placeholders: the loop runs at least once
             # a finished cell of a batch (its result frozen) does not iterate: under vmap the
             # batch's iterations are its slowest cell's, and a finished (overturned) cell's state
             # was the one that needed a third iteration
-            init = (qp, c["done"], 0, aux0, jnp.asarray(jnp.inf, dtype))
-            q1, conv, _, aux, _ = jax.lax.while_loop(ncond, nbody, init)
+            init = (qp, c["done"], 0, jnp.asarray(jnp.inf, dtype), c["rho"])
+            q1, conv, _, _, rho = jax.lax.while_loop(ncond, nbody, init)
             # The last increment is applied: an increment δ left out is a velocity error γδ/(β dt),
             # which grows as the steps shrink. a₁, v₁ are linear in q₁; the total force is the one
-            # the step equation implies at q₁ (exact to O(δ²)), so no force evaluation is repeated;
-            # the ground and damping forces of the energy integrals are the last iteration's.
-            _, _, _, fe1, fd1 = aux
+            # the step equation implies at q₁ (exact to O(δ²)), so no force evaluation is repeated,
+            # except the ground and damping forces of the energy integrals when they are tracked.
             a1 = acc_of(q1)
             v1 = vel_of(a1)
+            if track:
+                _, fe1, fd1 = mech.forces_without_spring(t1, q1, v1, excitation)
+            else:
+                fe1 = fd1 = jnp.zeros_like(q1)
             f1_tot = (M @ ((1 - am) * a1 + am * a) - af * f_tot) / (1 - af)
             err = jnp.max(jnp.abs(dt**2 * (beta - 1.0 / 6.0) * (a1 - a)) / tol_of(q, q1))
             if ig.crossing is not None and not clamp:
@@ -305,7 +305,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 excess = jnp.where(through, jnp.abs(th1 - th0) / (ig.crossing * theta_s), 0.0)
                 err = jnp.maximum(err, excess**3)
             err = jnp.where(conv & jnp.isfinite(err), err, jnp.inf)
-            return dict(n1=n1, t1=t1, q1=q1, v1=v1, a1=a1 * free, f1=f1_tot, fe1=fe1, fd1=fd1, err=err, dt=dt)
+            return dict(n1=n1, t1=t1, q1=q1, v1=v1, a1=a1 * free, f1=f1_tot, fe1=fe1, fd1=fd1, err=err, dt=dt, rho=rho)
 
         def body(c):
             s = step(c)
@@ -329,7 +329,9 @@ class GeneralizedAlphaStepper(AbstractStepper):
             om0, om1 = c["v"][0], s["v1"][0]
             rec = c["rec"].merge(watch.steps(jnp.stack([t, t1]), jnp.stack([th0, th1]), jnp.stack([om0, om1])))
             dt = s["dt"]
-            ew = c["ew"] + 0.5 * dt * jnp.stack([c["v"] @ c["fd"] + s["v1"] @ s["fd1"], c["v"] @ c["fe"] + s["v1"] @ s["fe1"]])
+            ew = c["ew"]
+            if track:
+                ew = ew + 0.5 * dt * jnp.stack([c["v"] @ c["fd"] + s["v1"] @ s["fd1"], c["v"] @ c["fe"] + s["v1"] @ s["fe1"]])
             finished = rec.overturned | (t1 >= t_stop)
             if summary:
                 energy = mech.kinetic(s["v1"]) + mech.potential(s["q1"])
@@ -337,11 +339,11 @@ class GeneralizedAlphaStepper(AbstractStepper):
             new = dict(
                 n=s["n1"], k=k_new, t=t1, q=s["q1"], v=s["v1"], a=s["a1"], f=s["f1"], ew=ew, fd=s["fd1"], fe=s["fe1"],
                 rec=rec, done=finished,
-                failed=jnp.asarray(False), steps=c["steps"] + 1, hist=c["hist"], ptr=c["ptr"], Kinv=c["Kinv"],
+                failed=jnp.asarray(False), steps=c["steps"] + 1, hist=c["hist"], ptr=c["ptr"], Kinv=c["Kinv"], rho=s["rho"],
             )
             if save_ts is not None:
                 new["hist"], new["ptr"] = _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track)
-            rejected = dict(c, k=k_new, steps=c["steps"] + 1, done=failed, failed=failed)
+            rejected = dict(c, k=k_new, steps=c["steps"] + 1, done=failed, failed=failed, rho=s["rho"])
             Kinv = new.pop("Kinv")  # constant: not copied through the select
             del rejected["Kinv"]
             out = jax.tree_util.tree_map(lambda x_ok, x_no: jnp.where(ok, x_ok, x_no), new, rejected)
