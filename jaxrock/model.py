@@ -70,11 +70,21 @@ class Schedule(NamedTuple):
     - `smallest_batch`: the batch size below which gathering stops paying (a cheap step's batch
       overhead is large).
     - `bytes_per_scene`: memory a running scene holds beyond its inputs (sizes the batches).
+    - `lanes`: 0, every running cell in every pass; else at most this many cells per pass, those
+      already started first, so that a finished cell's place goes to the next one (for dear steps
+      whose cells differ widely in length: a batch does not wait for its slowest cell); a spectrum's
+      batches then hold at least 4 × `lanes` cells (`batch_unit`).
     """
 
     passes: tuple[int, ...] = ()
     smallest_batch: int = 64
     bytes_per_scene: int = 0
+    lanes: int = 0
+
+    @property
+    def batch_unit(self) -> int:
+        """The least batch a spectrum splits its grid into (`jaxrock.analyses.engine.even_batches`)."""
+        return max(self.smallest_batch, 4 * self.lanes)
 
 
 class AbstractStepper(eqx.Module):

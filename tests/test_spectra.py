@@ -222,9 +222,15 @@ def flexible():
     return jr.SpringModel(jr.Block.from_size(50.0, 5.0), jr.Column.concrete(), n_elements=4)
 
 
-def test_flexible_spectrum_cells_equal_single_runs(flexible):
-    """The generalized-α batch runs in passes, gathering the cells still running: each cell must
-    still be its own `simulate` (to round-off of the batch layout)."""
+@pytest.mark.parametrize("lanes", [None, 2], ids=["default", "2-lanes-16-steps"])
+def test_flexible_spectrum_cells_equal_single_runs(flexible, lanes, monkeypatch):
+    """The generalized-α batch runs in passes on at most `Schedule.lanes` cells, a finished cell's
+    place going to the next: each cell must still be its own `simulate` (to round-off of the batch
+    layout). With 2 lanes and passes of 16 steps, the 9 cells come and go in ~40 passes."""
+    if lanes is not None:
+        from jaxrock.model import Schedule
+        from jaxrock.spring.generalized_alpha import GeneralizedAlphaStepper
+        monkeypatch.setattr(GeneralizedAlphaStepper, "schedule", property(lambda self: Schedule(passes=(16,), smallest_batch=1, lanes=lanes)))
     w, a = np.array([1.0, 6.0, 13.0]), np.array([0.8, 3.0, 8.0])
     s = jr.overturning_spectrum(flexible, w, a, progress=False)
     p, tan_a = float(flexible.block.p_r), float(flexible.block.tan_alpha)

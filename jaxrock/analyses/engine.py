@@ -106,8 +106,9 @@ def _solve(stepper, exc, batched):
 
 def _compacted(stepper: AbstractStepper, excitations, batched: bool) -> Solution:
     """Run a batch in passes (`Schedule.passes`), gathering the cells still running between
-    passes: the same results as `simulate`, cell by cell."""
-    passes, smallest = stepper.schedule.passes, stepper.schedule.smallest_batch
+    passes (with `Schedule.lanes`, at most that many, the started ones first, so that a finished
+    cell's place goes to the next): the same results as `simulate`, cell by cell."""
+    passes, smallest, lanes = stepper.schedule.passes, stepper.schedule.smallest_batch, stepper.schedule.lanes
     n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
     # The state (and the batched inputs) live on the host between passes: gathers and scatters of
     # changing sizes in numpy cost nothing, where in JAX each new size would compile.
@@ -116,13 +117,18 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool) -> Solution
     dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
     dyn_e, dyn_s = tree_np(dyn_e), tree_np(dyn_s)
     state, done = tree_np(_init(stepper, excitations, batched))
+    started = np.zeros(n, dtype=bool)
     used, k = 0, 0
-    while used < stepper.max_steps:
+    while lanes or used < stepper.max_steps:  # with lanes, each cell's own bound ends it (`done`)
         todo = np.flatnonzero(~done)
         if todo.size == 0:
             break
-        n_pass = min(passes[k], stepper.max_steps - used)
-        size = _bucket(todo.size, n, smallest)
+        if lanes:
+            todo = np.concatenate([todo[started[todo]], todo[~started[todo]]])[:lanes]
+            started[todo] = True
+            n_pass, size = passes[k], ladder(todo.size, smallest)
+        else:
+            n_pass, size = min(passes[k], stepper.max_steps - used), _bucket(todo.size, n, smallest)
         for lo in range(0, todo.size, size):
             idx = todo[lo : lo + size]
             padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])

@@ -204,7 +204,7 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
                 out[k][cells] = saved[k]
     integ = model.default_integrator() if integrator is None else integrator
     stepper = make_stepper(model, integ, False)  # compiled once, reused by run_batch (the same call)
-    batch_size = even_batches(n, min(int(batch_size), batch_limit(stepper)), stepper.schedule.smallest_batch)
+    batch_size = even_batches(n, min(int(batch_size), batch_limit(stepper)), stepper.schedule.batch_unit)
     starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
     bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
     for s in starts:
