@@ -190,6 +190,19 @@ def test_closed_form_forces_are_the_energy_gradient_and_rayleigh_transpose():
         np.testing.assert_allclose(g_d, ref_d, rtol=0, atol=1e-12 * float(jnp.max(jnp.abs(ref_d))))
 
 
+@pytest.mark.parametrize("n", [1, 2, 10])
+def test_structured_mass_product_is_the_mass_matrix(n):
+    """`beam.mass_times` (the rod mass's tridiagonal coupling and the rotational masses, written
+    out) is `beam.mass_matrix(...) @ x`, for one element, two, and ten."""
+    rng = np.random.default_rng(n)
+    rot, m = jnp.asarray(rng.uniform(1.0, 2.0, n + 1) * 1e5), 6.25e5
+    M = beam.mass_matrix(25.0, n, m, rot)
+    for _ in range(3):
+        x = jnp.asarray(rng.normal(size=beam.n_dof(n)))
+        ref = M @ x
+        np.testing.assert_allclose(beam.mass_times(x, n, m, rot), ref, rtol=0, atol=1e-14 * float(jnp.max(jnp.abs(ref))))
+
+
 def test_preload_is_static_equilibrium():
     blk = Block.from_size(50.0, 5.0)
     model = SpringModel(blk, Column.concrete())

@@ -145,6 +145,25 @@ def mass_matrix(h, n: int, m, rot_masses) -> Float[Array, "N N"]:
     return M
 
 
+def mass_times(x, n: int, m, rot_masses):
+    """`mass_matrix(h, n, m, rot_masses) @ x` from its structure: the rod mass couples each node's
+    u_x (and u_y) with its neighbours' (m_e/3 per element end, m_e/6 across an element; the base
+    node does not move), the rotational masses act on the node rotations alone. A few fused
+    elementwise operations: under `vmap` on XLA:CPU the dense product is a library call of ~6 µs
+    per batch of 16 (31 DOFs), most of a flexible step's cost."""
+    me = m / n
+    diag = jnp.concatenate([jnp.full(n - 1, 2.0), jnp.ones(1)]) * (me / 3)
+    zero = jnp.zeros(1, x.dtype)
+
+    def rod(u):
+        return diag * u + (me / 6) * (jnp.concatenate([zero, u[:-1]]) + jnp.concatenate([u[1:], zero]))
+
+    rest = x[1:].reshape(n, 3)
+    phi = x[0::3]
+    out = jnp.stack([rod(rest[:, 0]), rod(rest[:, 1]), rot_masses[1:] * phi[1:]], axis=1).reshape(-1)
+    return jnp.concatenate([rot_masses[:1] * phi[:1], out])
+
+
 def influence_x(n: int) -> Float[Array, " N"]:
     """Influence vector of a horizontal ground motion: 1 on the u_x DOFs."""
     r = jnp.zeros(n_dof(n))

@@ -260,7 +260,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
             def residual(q1):
                 a1 = acc_of(q1)
                 fr, _, _ = mech.forces_without_spring(t1, q1, vel_of(a1), excitation)
-                return (M @ ((1 - am) * a1 + am * a) - (1 - af) * fr - af * f_tot) * free
+                return (mech.mass_times((1 - am) * a1 + am * a) - (1 - af) * fr - af * f_tot) * free
 
             def ncond(nc):
                 return (~nc[1]) & (nc[2] < ig.max_newton)
@@ -299,7 +299,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 _, fe1, fd1 = mech.forces_without_spring(t1, q1, v1, excitation)
             else:
                 fe1 = fd1 = jnp.zeros_like(q1)
-            f1_tot = (M @ ((1 - am) * a1 + am * a) - af * f_tot) / (1 - af)
+            f1_tot = (mech.mass_times((1 - am) * a1 + am * a) - af * f_tot) / (1 - af)
             err = jnp.max(jnp.abs(dt**2 * (beta - 1.0 / 6.0) * (a1 - a)) / tol_of(q, q1))
             if ig.crossing is not None and not clamp:
                 # a step through the pre-yield band moves θ by at most `crossing` θs; the excess

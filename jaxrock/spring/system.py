@@ -33,7 +33,8 @@ class SpringSystem(eqx.Module):
     array a right-hand side needs, computed once per scene — a value, vmappable like the model.
 
     - sizes: `n` elements (None: the one-DOF quasi-rigid body), `ndof`;
-    - mass: `m`, `Itot` (one-DOF inertia about the base centre), `M`, `Minv` (flexible);
+    - mass: `m`, `Itot` (one-DOF inertia about the base centre), `M`, `rot_masses`, `Minv`
+      (flexible), `mass_times` (M x from its structure);
     - base: `backbone`, `My`, `theta_s` (spring), `c` (damper, eq. 18), `fixed_base`;
     - column: `EA`, `EI`, `a1` (Rayleigh), `q_eq`, `V_eq` (the gravity-preloaded rest state), `r`
       (ground load vector);
@@ -61,6 +62,7 @@ class SpringSystem(eqx.Module):
     EI: Array | None
     a1: Array | None
     M: Array | None
+    rot_masses: Array | None  # the nodal rotational masses of M (`beam.mass_times`)
     Minv: Array | None
     q_eq: Array | None
     V_eq: Array | None
@@ -124,7 +126,7 @@ class SpringSystem(eqx.Module):
     def kinetic(self, v):
         if self.n is None:
             return 0.5 * self.Itot * v[0] ** 2
-        return 0.5 * v @ (self.M @ v)
+        return 0.5 * v @ self.mass_times(v)
 
     # -- forces -----------------------------------------------------------------------------------
     def _column_damping(self, q, v):
@@ -174,6 +176,10 @@ class SpringSystem(eqx.Module):
 
     def mass_matrix(self):
         return jnp.reshape(self.Itot, (1, 1)) if self.n is None else self.M
+
+    def mass_times(self, x):
+        """`mass_matrix() @ x`, from the matrix's structure (`beam.mass_times`)."""
+        return self.Itot * x if self.n is None else beam.mass_times(x, self.n, self.m, self.rot_masses)
 
     def tangents(self):
         """(K₀, C₀): stiffness (Hessian of the column potential, spring excluded) and damping
@@ -315,15 +321,16 @@ def assemble(model, track_energy: bool = False) -> SpringSystem:
         Itot=Itot,
     )
     if model.column is None:
-        return SpringSystem(n=None, EA=None, EI=None, a1=None, M=None, Minv=None, q_eq=None, V_eq=None, r=None, **common)
+        return SpringSystem(n=None, EA=None, EI=None, a1=None, M=None, rot_masses=None, Minv=None, q_eq=None, V_eq=None, r=None, **common)
     n = model.n_elements
     A, I = model.column.section(blk)
     EA, EI = model.column.E * A, model.column.E * I
-    M = beam.mass_matrix(blk.h, n, m, model.rotational_masses())
+    rot_masses = model.rotational_masses()
+    M = beam.mass_matrix(blk.h, n, m, rot_masses)
     Minv = _linalg.inv(M)
     Minv = 0.5 * (Minv + Minv.T)
     _, a1 = model.rayleigh()
-    sys_ = SpringSystem(n=n, EA=EA, EI=EI, a1=a1, M=M, Minv=Minv, q_eq=jnp.zeros(beam.n_dof(n)), V_eq=jnp.zeros(()), r=beam.ground_load(n, m), **common)
+    sys_ = SpringSystem(n=n, EA=EA, EI=EI, a1=a1, M=M, rot_masses=rot_masses, Minv=Minv, q_eq=jnp.zeros(beam.n_dof(n)), V_eq=jnp.zeros(()), r=beam.ground_load(n, m), **common)
     # gravity preload: static equilibrium at θ = 0 (axial shortening), by Newton on ∇V = 0
     N = beam.n_dof(n)
     grad_v = jax.grad(sys_._column_potential)
