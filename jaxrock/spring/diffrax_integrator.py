@@ -210,7 +210,11 @@ class DiffraxSpringStepper(AbstractStepper):
 
     @property
     def schedule(self) -> Schedule:
-        return Schedule(passes=(4, 4, 8), smallest_batch=64) if self.save is None else Schedule()
+        # a summary: 64 lanes refilled every 4 pieces, one compiled size (quasi-rigid Tsit5
+        # default, 32×32 and 24×24 grids: 0.23 ms/scene on both, cold compile 3.9 s, against
+        # 0.26 and 0.41 ms, 6.2 s gathering every running cell in passes of 4, 4, 8 pieces;
+        # 128 lanes the same, 256 lanes 0.28/0.35, passes of 8 pieces 0.28/0.36)
+        return Schedule(passes=(4,), smallest_batch=64, lanes=64) if self.save is None else Schedule()
 
     def init(self, excitation) -> _Carry:
         system = self.system
