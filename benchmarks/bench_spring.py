@@ -55,7 +55,7 @@ def out(line: str = "") -> None:
     LINES.append(line)
 
 
-def jax_grid(model, wr, ar, integrator, repeat=2):
+def jax_grid(model, wr, ar, integrator, repeat=5):
     t = time.perf_counter()
     jr.overturning_spectrum(model, wr, ar, integrator=integrator, progress=False)
     t1 = time.perf_counter() - t

@@ -1,9 +1,10 @@
 """The batch engine: summaries of many scenes at once, each driven through its model's
 `AbstractStepper` (`jaxrock.model`). Where the stepper's `Schedule` has passes (the rigid model,
-generalized-α spring runs) a batch is advanced a few loop steps at a time and the cells still
+spring-model summaries) a batch is advanced a few loop steps at a time and the cells still
 running are gathered into a smaller batch between passes, so that a few long cells (chattering
-near the uplift line, rocking near the overturning line) do not make the whole batch wait; else
-it is one vmapped solve. Every scene is guarded as `simulate` guards it. Used by the spectra, the
+near the uplift line, rocking near the overturning line) do not make the whole batch wait; with
+`Schedule.lanes` (the spring model's dearer steps) a pass holds at most that many cells and a
+finished cell's place goes to the next one. Else it is one vmapped solve. Every scene is guarded as `simulate` guards it. Used by the spectra, the
 scenes files and any sweep.
 
 Three calls, three sizes: `simulate` runs one scene; `run_batch` a batch in memory (one model for
