@@ -63,12 +63,16 @@ def from_positions(x, y, phi, h, n: int):
     return jnp.concatenate([phi[:1], rest])
 
 
+def _chords(q, h, n: int):
+    """Every element's chord (Δx, Δy) and the node rotations φ (of velocities with h = 0)."""
+    x, y, phi = positions(q, h, n)
+    return x[1:] - x[:-1], y[1:] - y[:-1], phi
+
+
 def element_deformations(q, h, n: int):
     """Local deformations of every element: axial extension L − L₀ and end rotations relative to
     the chord, θ₁ = φ_i − β, θ₂ = φ_j − β (β: chord angle clockwise from vertical)."""
-    x, y, phi = positions(q, h, n)
-    dx = x[1:] - x[:-1]
-    dy = y[1:] - y[:-1]
+    dx, dy, phi = _chords(q, h, n)
     L0 = 2 * h / n
     L = jnp.sqrt(dx**2 + dy**2)
     beta = jnp.arctan2(dx, dy)
@@ -97,17 +101,13 @@ def internal_forces(q, v, h, n: int, EA, EI, a1):
     ±(N Δx/L − (M₁ + M₂) Δy/L², N Δy/L + (M₁ + M₂) Δx/L²) and M₁, M₂ on φ_i, φ_j. The same as
     `jax.grad(strain_energy)` and the transposed linearisation (tests/test_spring.py), without
     the pads and splits of the autodiff transpose, which cost ~5× more under `vmap` on CPU."""
-    x, y, phi = positions(q, h, n)
-    vx, vy, vphi = positions(v, 0.0 * h, n)  # node velocities (no rest heights)
-    dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]
-    dvx, dvy = vx[1:] - vx[:-1], vy[1:] - vy[:-1]
+    d = element_deformations(q, h, n)
+    dx, dy, _ = _chords(q, h, n)  # (L and β: the same expressions as d's, computed once by XLA)
+    dvx, dvy, vphi = _chords(v, 0.0 * h, n)  # node velocities (no rest heights)
     L2 = dx**2 + dy**2
     L = jnp.sqrt(L2)
-    beta = jnp.arctan2(dx, dy)
-    L_dot = (dx * dvx + dy * dvy) / L
     beta_dot = (dy * dvx - dx * dvy) / L2
-    d = (L - 2 * h / n, phi[:-1] - beta, phi[1:] - beta)
-    d_dot = (L_dot, vphi[:-1] - beta_dot, vphi[1:] - beta_dot)
+    d_dot = ((dx * dvx + dy * dvy) / L, vphi[:-1] - beta_dot, vphi[1:] - beta_dot)
     # both force sets at once: leading axis [elastic, damping]
     N, M1, M2 = (jnp.stack([a, a1 * b]) for a, b in zip(local_forces(d, h, n, EA, EI), local_forces(d_dot, h, n, EA, EI)))
     fx = N * dx / L - (M1 + M2) * dy / L2
