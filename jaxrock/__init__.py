@@ -39,11 +39,11 @@ _EXPORTS = {
     **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
     **dict.fromkeys(["SpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "AbstractBackbone", "Bilinear",
                      "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
-    **dict.fromkeys(["el_centro", "read_at2", "read_record", "read_two_column"], "io.records"),
+    **dict.fromkeys(["el_centro", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",
     **dict.fromkeys(["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
                      "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
-                     "rm_target"], "analyses"),
+                     "rm_target", "Sweep", "run_sweep"], "analyses"),
     "calibration_report": "reports",  # writes figures: matplotlib is imported with it
 }
 __all__ = list(_EXPORTS)

@@ -24,6 +24,7 @@ arguments from it before JAX is loaded, and the classes it names are imported wh
 from __future__ import annotations
 
 import importlib
+import math
 from typing import Callable, NamedTuple
 
 from ._validate import JaxrockInputError, check_positive, check_range
@@ -205,3 +206,23 @@ def parameter_help(name: str, valid: bool = True) -> str:
     p = next(q for q in parameters() if q.name == name)
     unit = "" if p.unit == "–" else f" [{p.unit}]"
     return (f"{p.meaning}{unit}" + (f"; {p.valid}" if valid else "")).replace("`", "")
+
+
+# -- sweeps ----------------------------------------------------------------------------------------
+# what a sweep (`jaxrock.analyses.sweep`) can vary, in its store's dimension order (outermost first):
+# quantity → (long name, units, valid range (lo, hi, lo_open, hi_open); None for the record names)
+SWEEP_QUANTITIES = {
+    "record": ("ground-motion record", "", None),
+    "height": ("full height 2h", "m", (0.0, math.inf, True, True)),
+    "tan_alpha": ("slenderness tan(alpha) = b/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
+    "tan_alpha_base": ("extended base slenderness tan(alpha') = b'/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
+    "eta": ("rigid impact velocity ratio", "1", (0.0, 1.0, False, False)),
+    "cbar": ("spring-model damper cbar", "1", (0.0, math.inf, False, True)),
+    "E": ("Young's modulus of the column", "Pa", (0.0, math.inf, True, True)),
+    "rho": ("density of the column", "kg m-3", (0.0, math.inf, True, True)),
+    "zeta": ("column damping ratio", "1", (0.0, math.inf, False, True)),
+    "smoothing": ("spring pre-yield rotation theta_s/alpha'", "1", (0.0, 1.0, True, True)),
+    "scale": ("record scale factor", "1", (0.0, math.inf, False, True)),
+    "accel_ratio": ("a_p/(g tan alpha')", "1", (0.0, math.inf, True, True)),
+    "omega_ratio": ("omega_p/p'", "1", (0.0, math.inf, True, True)),
+}

@@ -5,6 +5,12 @@ from __future__ import annotations
 
 import csv
 import math
+import os
+import re
+import subprocess
+import sys
+import threading
+import time
 
 from typer.testing import CliRunner
 
@@ -38,3 +44,35 @@ def spec_extended(height, tan_a, tan_base):
     R2, Rp = h * h + b * b, math.hypot(h, bb)
     io = R2 / 3 + Rp**2
     return math.atan(bb / h), math.sqrt(G * Rp / io), 1 - 2 * bb * bb / io
+
+
+def jaxrock_process(*args, cwd, env=None):
+    """A real `jaxrock` process (python -m jaxrock.cli), its output piped."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "JAX_PLATFORMS": "cpu", **(env or {})}
+    return subprocess.Popen([sys.executable, "-m", "jaxrock.cli", *map(str, args)], cwd=cwd, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+class Watch:
+    """Reads a process's stderr (progress bars write '\\r', not lines) as it comes."""
+
+    def __init__(self, proc):
+        self.proc, self.text = proc, ""
+        self._t = threading.Thread(target=self._read, daemon=True)
+        self._t.start()
+
+    def _read(self):
+        for ch in iter(lambda: self.proc.stderr.read(1), ""):
+            self.text += ch
+
+    def wait_for(self, pattern: str, timeout: float = 120.0):
+        t0 = time.monotonic()
+        while not re.search(pattern, self.text):
+            if self.proc.poll() is not None or time.monotonic() - t0 > timeout:
+                raise AssertionError(f"{pattern!r} never appeared; stderr:\n{self.text[-2000:]}")
+            time.sleep(0.02)
+
+    def finish(self, timeout: float = 240.0):
+        rc = self.proc.wait(timeout)
+        self._t.join(5)
+        return rc, self.proc.stdout.read(), self.text

@@ -4,49 +4,15 @@ uninterrupted one."""
 
 from __future__ import annotations
 
-import os
 import re
 import signal
-import subprocess
-import sys
-import threading
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
-
-
-def _jaxrock(*args, cwd):
-    env = {**os.environ, "PYTHONUNBUFFERED": "1", "JAX_PLATFORMS": "cpu"}
-    return subprocess.Popen([sys.executable, "-m", "jaxrock.cli", *map(str, args)], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-
-class _Watch:
-    """Reads a process's stderr (progress bars write '\\r', not lines) as it comes."""
-
-    def __init__(self, proc):
-        self.proc, self.text = proc, ""
-        self._t = threading.Thread(target=self._read, daemon=True)
-        self._t.start()
-
-    def _read(self):
-        for ch in iter(lambda: self.proc.stderr.read(1), ""):
-            self.text += ch
-
-    def wait_for(self, pattern: str, timeout: float = 120.0):
-        t0 = time.monotonic()
-        while not re.search(pattern, self.text):
-            if self.proc.poll() is not None or time.monotonic() - t0 > timeout:
-                raise AssertionError(f"{pattern!r} never appeared; stderr:\n{self.text[-2000:]}")
-            time.sleep(0.02)
-
-    def finish(self, timeout: float = 240.0):
-        rc = self.proc.wait(timeout)
-        self._t.join(5)
-        return rc, self.proc.stdout.read(), self.text
+from helpers import Watch as _Watch
+from helpers import jaxrock_process as _jaxrock
 
 
 def _spectrum_args(out):

@@ -5,14 +5,17 @@
   least overturning scale of a record (`record_overturning_scale`);
 - `free_rocking`: the spring model's energy ratio per free-rocking cycle (figure 7);
 - `calibration`: the damper c̄ calibrated by gradient against the rigid model's energy loss (eq. 17);
-- `scenes`: a scenes file run row by row, vmapped by structure (`run_scenes`).
+- `scenes`: a scenes file run row by row, vmapped by structure (`run_scenes`);
+- `sweep`: every scene of a product of axes, chunk by chunk into a Zarr store, on local devices or a
+  Dask cluster (`Sweep`, `run_sweep`).
 """
 
 from .calibration import CalibrationResult, calibrate_cbar, fit_power_law
 from .free_rocking import energy_ratio, energy_ratio_grid, rm_target
 from .engine import run_batch
 from .scenes import run_scenes
+from .sweep import Sweep, run_sweep
 from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, refine_boundaries
 
 __all__ = ["run_batch", "Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries",
-           "run_scenes", "CalibrationResult", "calibrate_cbar", "energy_ratio", "energy_ratio_grid", "fit_power_law", "rm_target"]
+           "run_scenes", "CalibrationResult", "calibrate_cbar", "energy_ratio", "energy_ratio_grid", "fit_power_law", "rm_target", "Sweep", "run_sweep"]

@@ -105,11 +105,21 @@ def _solve(stepper, exc, batched):
     return _vmap(lambda s, e: s.solve(e), batched)(stepper, exc)
 
 
-def _compacted(stepper: AbstractStepper, excitations, batched: bool) -> Solution:
+def mesh_of(devices=None):
+    """A 1-D mesh (axis "scenes") of `devices` (None: every local device); None for one device."""
+    devices = jax.local_devices() if devices is None else list(devices)
+    return jax.sharding.Mesh(np.asarray(devices), ("scenes",)) if len(devices) > 1 else None
+
+
+def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh=None) -> Solution:
     """Run a batch in passes (`Schedule.passes`), gathering the cells still running between
     passes (with `Schedule.lanes`, at most that many, the started ones first, so that a finished
-    cell's place goes to the next): the same results as `simulate`, cell by cell."""
+    cell's place goes to the next): the same results as `simulate`, cell by cell. With a `mesh`
+    each pass is sharded over its devices: passes are padded to a multiple of their number, and
+    `lanes` is per device."""
     passes, smallest, lanes = stepper.schedule.passes, stepper.schedule.smallest_batch, stepper.schedule.lanes
+    n_dev = 1 if mesh is None else mesh.size
+    lanes *= n_dev
     n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
     # The state (and the batched inputs) live on the host between passes: gathers and scatters of
     # changing sizes in numpy cost nothing, where in JAX each new size would compile.
@@ -130,13 +140,14 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool) -> Solution
             n_pass, size = passes[k], ladder(todo.size, smallest)
         else:
             n_pass, size = min(passes[k], stepper.max_steps - used), _bucket(todo.size, n, smallest)
+        size = -(-size // n_dev) * n_dev
         for lo in range(0, todo.size, size):
             idx = todo[lo : lo + size]
             padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
             take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
             sub_s = eqx.combine(take(dyn_s), static_s) if batched else stepper
             sub_e = eqx.combine(take(dyn_e), static_e)
-            sub_c, sub_done = tree_np(kernels.advance(sub_s, sub_e, take(state), n_pass, batched))
+            sub_c, sub_done = tree_np(kernels.advance(sub_s, sub_e, take(state), n_pass, batched, mesh))
 
             def put(x, y):
                 x[idx] = y[: idx.size]
@@ -155,17 +166,20 @@ def run_batch(
     integrator: AbstractIntegrator | None = None,
     *,
     model_batched: bool = False,
+    devices=None,
 ) -> Solution:
     """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
     and so does `model` when `model_batched` (one model per scene; else one model for all).
     Driven through the model's `AbstractStepper`: in passes with the running cells gathered between
     them when its `schedule` has passes, else as one vmapped `solve`. A scene with a parameter
-    outside its limits comes back `Status.invalid_input` with NaN numbers, as from `simulate`."""
+    outside its limits comes back `Status.invalid_input` with NaN numbers, as from `simulate`.
+    The passes are sharded over `devices` (None: every local device; one device: no sharding),
+    with the same numbers bit for bit."""
     integ = model.default_integrator() if integrator is None else integrator
     model, excitations, ok = _guard(model, excitations, model_batched)
     stepper = make_stepper(model, integ, model_batched)
     if stepper.schedule.passes:
-        sol = _compacted(stepper, excitations, model_batched)
+        sol = _compacted(stepper, excitations, model_batched, mesh_of(devices))
     else:
         sol = _solve(stepper, excitations, model_batched)
     return _flag(sol, ok)

@@ -11,6 +11,7 @@ from typing import Optional
 import numpy as np
 import typer
 
+from . import guards
 from .guards import (CELL_SECONDS, EXIT_INTERRUPTED, EXIT_UNTRUSTED, RECORD_RUN_SECONDS, _estimate, _exit_if_untrusted, _guarded,
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
@@ -284,6 +285,137 @@ def record_spectrum(
     for h, s in zip(rs.height, rs.scale):
         typer.echo(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}")
     typer.echo(f"wrote {nc}, {csv_path}, {png}")
+
+
+# ----------------------------------------------------------------------------------------------
+# sweep
+# ----------------------------------------------------------------------------------------------
+_LIST = "one value, or several ('1,2,5' or 'a:b:n'): an axis of the sweep"
+
+
+@app.command()
+@_guarded
+def sweep(
+    model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
+    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="Ricker pulse shape (pulse sweeps)"),
+    accel_ratio: Optional[str] = typer.Option(None, help=f"a_p/(g tanα′): {_LIST} (pulse sweeps; default 0.5:10:48)"),
+    omega_ratio: Optional[str] = typer.Option(None, help=f"ω_p/p′: {_LIST} (pulse sweeps; default 1:15:48)"),
+    records: Optional[str] = typer.Option(None, help="a record sweep instead of pulses: record files, folders of records (.AT2, "
+                                          f".txt, .dat, .csv) or '{RECORD_ALIASES[1]}', separated by commas"),
+    units: Optional[str] = typer.Option(None, help="acceleration units of two-column record files (default g)"),
+    scale: Optional[str] = typer.Option(None, help=f"record factor: {_LIST} (record sweeps; default 1)"),
+    height: str = typer.Option("10", help=f"full height 2h [m]: {_LIST}"),
+    tan_alpha: str = typer.Option("0.2", help=f"slenderness tanα: {_LIST}"),
+    tan_alpha_base: Optional[str] = typer.Option(None, help=f"extended base tanα′ ≥ tanα: {_LIST}"),
+    eta: Optional[str] = typer.Option(None, help=f"{parameter_help('eta')}: {_LIST}"),
+    cbar: Optional[str] = typer.Option(None, help=f"{parameter_help('cbar')}: {_LIST}"),
+    E: Optional[str] = typer.Option(None, "--E", help=f"{parameter_help('E')}: {_LIST}"),
+    rho: Optional[str] = typer.Option(None, help=f"{parameter_help('rho')}: {_LIST}"),
+    zeta: Optional[str] = typer.Option(None, help=f"{parameter_help('zeta')}: {_LIST}"),
+    smoothing: Optional[str] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1): {_LIST}"),
+    backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {DEFAULT_BACKBONE})"),
+    tol: Optional[float] = typer.Option(None, help="spring models: generalized-α at this local tolerance (default: the model's default integrator)"),
+    store: Path = typer.Option(Path("out/sweep.zarr"), help="the Zarr store (xarray.open_zarr reads it); a rerun of the same "
+                               "command resumes it, one with other parameters is refused"),
+    chunk_size: int = typer.Option(4096, help="most scenes per chunk: one vmapped batch, one Zarr chunk, one Dask task"),
+    devices: Optional[int] = typer.Option(None, help="shard each chunk over this many local devices (default: all)"),
+    scheduler: Optional[str] = typer.Option(None, help="address of a running Dask scheduler (tcp://host:8786): each chunk is a "
+                                            "task of its workers, which write into --store (a folder they all see); needs "
+                                            "jaxrock[distributed]"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h or 2 GB"),
+):
+    """Every scene of a product of axes (pulses or records × sizes × slendernesses × model
+    parameters) into a chunked Zarr store: resumable, sharded over local devices, or spread over a
+    Dask cluster."""
+    from .._validate import JaxrockInputError, check_writable
+    from ..scene import takes
+
+    _check_count("--chunk-size", chunk_size)
+    if devices is not None:
+        _check_count("--devices", devices)
+    lists = {"height": height, "tan_alpha": tan_alpha, "tan_alpha_base": tan_alpha_base, "eta": eta, "cbar": cbar, "E": E,
+             "rho": rho, "zeta": zeta, "smoothing": smoothing, "accel_ratio": accel_ratio, "omega_ratio": omega_ratio,
+             "scale": scale}
+    given = {}
+    for name, text in lists.items():
+        if text is None:
+            continue
+        flag = "--" + (name if name == "E" else name.replace("_", "-"))
+        if name in ("eta", "cbar", "E", "rho", "zeta", "smoothing") and model.value not in takes(name):
+            raise JaxrockInputError(f"{flag} applies to --model {' / '.join(takes(name))} only, not {model.value}")
+        v = parse_values(flag, text)
+        given[name] = float(v[0]) if v.size == 1 else v
+    if records is None:
+        if scale is not None:
+            raise JaxrockInputError("--scale applies to record sweeps (--records), not to pulses")
+        given.setdefault("accel_ratio", np.linspace(0.5, 10.0, 48))
+        given.setdefault("omega_ratio", np.linspace(1.0, 15.0, 48))
+        recs = None
+    else:
+        for name in ("accel_ratio", "omega_ratio"):
+            if name in given:
+                raise JaxrockInputError(f"--{name.replace('_', '-')} applies to pulse sweeps, not to --records")
+        from ..io.records import read_records
+
+        recs = read_records([r for r in records.split(",") if r.strip()], units=units)
+    if scheduler is not None and devices is not None:
+        raise JaxrockInputError("--devices applies to this process; with --scheduler each worker uses its own devices")
+    if store.exists() and not store.is_dir():
+        raise JaxrockInputError(f"--store {store}: is a file; expected a Zarr store folder (new or made by this sweep)")
+    check_writable("--store", store.with_name(store.name + ".lock"))
+    from ..analyses.sweep import Sweep
+
+    sw = Sweep.make(model.value, pulse=None if recs else pulse.value, records=recs, integrator=_integrator(model, tol),
+                    backbone=None if backbone is None else backbone.value, chunk_size=chunk_size, **given)
+    if recs:
+        seconds = max(float(r.t_end - r.t_start) for r in recs)
+        per_run = RECORD_RUN_SECONDS * CELL_SECONDS[model.value] / CELL_SECONDS["rigid"] * seconds / 40.0
+        _estimate(sw.size, model.value, yes, what="record runs", per_cell=per_run)
+    else:
+        _estimate(sw.size, "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value, yes, what="scenes")
+    client = None
+    if scheduler is not None:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise JaxrockInputError("--scheduler needs Dask's distributed: pip install 'jaxrock[distributed]'") from None
+        try:
+            client = guards._held.enter_context(Client(scheduler, timeout="20s"))
+        except OSError as e:
+            raise JaxrockInputError(f"--scheduler {scheduler}: no Dask scheduler answers ({e})") from None
+    from ..analyses.sweep import run_sweep
+    from ..interrupt import Interrupted
+    from ..io import store as zstore
+
+    t0 = time.perf_counter()
+    try:
+        ds = run_sweep(sw, store, client=client, devices=None if devices is None else _local_devices(devices), progress=not quiet,
+                       history=_history())
+    except Interrupted:
+        kept = len(zstore.finished(store, sw)) if store.exists() else 0
+        typer.echo(f"interrupted: {kept} of {sw.n_chunks} chunks kept in {store}; resume with: {_resume_command()}", err=True)
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    seconds = time.perf_counter() - t0
+    dims = " × ".join(f"{len(v)} {k}" for k, v in sw.axes.items())
+    where = f"Dask cluster {scheduler}" if scheduler else f"{len(_local_devices(devices))} device(s)"
+    typer.echo(f"sweep: {sw.model} model, {dims} = {sw.size:,} scenes in {sw.n_chunks} chunk(s) of ≤ {math.prod(sw.chunk_shape):,}; "
+               f"{seconds:.1f} s ({sw.size / seconds:,.0f} scenes/s with compilation) on {where}")
+    typer.echo(f"overturned: {int(ds.overturned.sum()):,} scenes ({100 * float(ds.overturned.mean()):.1f} %); uplifted: "
+               f"{int(ds.uplifted.sum()):,}")
+    typer.echo(f"wrote {store}")
+    _exit_if_untrusted(_status_counts(ds.status.values), "scene(s)")
+
+
+def _local_devices(n: Optional[int]):
+    import jax
+
+    devs = jax.local_devices()
+    if n is not None and n > len(devs):
+        from .._validate import JaxrockInputError
+
+        raise JaxrockInputError(f"--devices = {n}; valid: 1 to {len(devs)} (this host's devices)")
+    return devs if n is None else devs[:n]
 
 
 # ----------------------------------------------------------------------------------------------

@@ -241,6 +241,39 @@ def read_record(path: str | os.PathLike, **kw) -> Record:
     return reader(path, **kw)
 
 
+RECORD_SUFFIXES = (".at2", ".txt", ".dat", ".csv")  # the files of a record folder (`read_records`)
+
+
+def read_records(sources, *, units: str | None = None) -> list[Record]:
+    """Records for a suite: each source is a record file, a folder (its files ending in one of
+    `RECORD_SUFFIXES`, any case, sorted by name) or an alias of the packaged El Centro record
+    (`jaxrock.scene.RECORD_ALIASES`). Files are read by `read_record` and named by their file stem
+    (unique within a folder); `units` as there. A folder without record files, a missing file or
+    two records of one name is refused in one line."""
+    from ..scene import is_builtin_record
+
+    out: list[Record] = []
+    for src in [sources] if isinstance(sources, (str, os.PathLike)) else list(sources):
+        if is_builtin_record(str(src)):
+            out.append(el_centro())
+            continue
+        path = Path(src)
+        if path.is_dir():
+            files = sorted(f for f in path.iterdir() if f.is_file() and f.suffix.lower() in RECORD_SUFFIXES)
+            if not files:
+                raise JaxrockInputError(f"records: {path} holds no record file (names ending in {', '.join(RECORD_SUFFIXES)})")
+        elif path.is_file():
+            files = [path]
+        else:
+            raise JaxrockInputError(f"records: {path}: no such file or folder")
+        out += [read_record(f, name=f.stem, **({} if units is None else {"units": units})) for f in files]
+    names = [r.name for r in out]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise JaxrockInputError(f"records: two records named {twice[0]!r}; rename one file")
+    return out
+
+
 def el_centro() -> Record:
     """El Centro 1940 NS ground acceleration (4000 samples at 0.01 s, PGA 0.3129 g), in m/s².
 

@@ -1,0 +1,358 @@
+"""Sweeps: every scene of a product of axes, run chunk by chunk into a labelled store.
+
+A `Sweep` is a value: one model kind, and for each scene quantity either one value or an axis of
+values — the spectra's axes a_p/(g tanα′) and ω_p/p′ (Ricker pulses), or records and their scale
+factor; the column's size 2h, slenderness tanα and base tanα′; the model parameters η, c̄, E, ρ, ζ
+and the spring's smoothing θs/α′. The product of its axes (in the order of `AXIS_ORDER`: records
+and model axes outside, excitation axes inside) is split into `chunks` of at most `chunk_size`
+scenes, each a hyper-rectangle of the grid (every record in its own chunks: records differ in
+length). `run_chunk` runs one chunk through the batch engine (`jaxrock.analyses.engine`: the
+compaction of the spectra; its scenes sharded over the host's devices when there are several) and
+returns its summary outputs; a chunk reads nothing but the sweep, so chunks run in any order, in
+any process, with the same bits.
+
+`run_sweep` runs the chunks not yet in the store (`jaxrock.io.store`: xarray on Zarr, one Zarr
+chunk per sweep chunk) in this process, or as tasks of a Dask cluster (`client`), with a progress
+bar; a rerun after an interruption runs only what is missing.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import math
+import time
+from typing import Callable, Iterable
+
+import numpy as np
+
+from .._validate import JaxrockInputError, check_range
+from ..outputs import OUTPUTS
+from ..scene import DEFAULT_PULSE, MODEL_KINDS, PULSES, SWEEP_QUANTITIES, model_kinds, takes
+
+QUANTITIES = SWEEP_QUANTITIES
+AXIS_ORDER = tuple(QUANTITIES)  # a store's dimensions, outermost first
+MODEL_QUANTITIES = ("height", "tan_alpha", "tan_alpha_base", "eta", "cbar", "E", "rho", "zeta", "smoothing")
+PULSE_QUANTITIES = ("accel_ratio", "omega_ratio")
+RECORD_QUANTITIES = ("record", "scale")
+DEFAULTS = {"height": 10.0, "tan_alpha": 0.2}  # the rest: the model kind's own defaults
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Sweep:
+    """Every scene of a product of axes (module docstring). Build with `Sweep.make`.
+
+    - `model`: a model kind (`jaxrock.scene.model_kinds()`); `backbone` its spring backbone name
+      (spring kinds; None: the default);
+    - `axes`: quantity → values (at least one), in `AXIS_ORDER`; `fixed`: quantity → one value;
+    - `pulse`: the Ricker pulse kind (pulse sweeps), or None with `records` (record sweeps:
+      `axes["record"]` holds their names);
+    - `integrator`: None (the model's default) or an integrator;
+    - `chunk_size`: the most scenes of one chunk.
+    """
+
+    model: str
+    axes: dict
+    fixed: dict
+    pulse: str | None
+    records: tuple = ()
+    backbone: str | None = None
+    integrator: object = None
+    chunk_size: int = 4096
+
+    @classmethod
+    def make(cls, model: str = "rigid", *, pulse: str | None = None, records=None, backbone: str | None = None,
+             integrator=None, chunk_size: int = 4096, **quantities) -> "Sweep":
+        """A checked sweep: each keyword of `QUANTITIES` is one number (fixed) or a sequence (an
+        axis). Pulse sweeps take `accel_ratio` and `omega_ratio` (both required); record sweeps
+        take `records` (a `jaxrock.Record` or a sequence of them) and `scale` (default 1).
+        Every value is checked here, naming the quantity and its valid range."""
+        if model not in MODEL_KINDS:
+            raise JaxrockInputError(f"model = {model!r}; valid: {', '.join(model_kinds())}")
+        unknown = sorted(set(quantities) - set(QUANTITIES) - {"record"})
+        if unknown or "record" in quantities:
+            raise JaxrockInputError(f"{', '.join(unknown) or 'record'}: not a sweep quantity; valid: "
+                                    f"{', '.join(q for q in AXIS_ORDER if q != 'record')} (and records=...)")
+        if int(chunk_size) < 1:
+            raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
+        given = {k: v for k, v in quantities.items() if v is not None}
+        for name in given:
+            if name in MODEL_QUANTITIES[3:] and model not in takes(name):
+                raise JaxrockInputError(f"{name} applies to model {' / '.join(takes(name))} only, not {model}")
+        if backbone is not None and "backbone" not in MODEL_KINDS[model].parameters:
+            raise JaxrockInputError(f"backbone applies to the spring models only, not {model}")
+        recs = () if records is None else (tuple(records) if isinstance(records, (list, tuple)) else (records,))
+        if recs:
+            if pulse is not None or any(q in given for q in PULSE_QUANTITIES):
+                raise JaxrockInputError("a sweep runs records or pulses, not both: drop pulse/accel_ratio/omega_ratio, or records")
+            names = [r.name for r in recs]
+            if len(set(names)) != len(names):
+                raise JaxrockInputError(f"records: two records share a name ({names}); give each its own")
+        else:
+            if "scale" in given:
+                raise JaxrockInputError("scale applies to record sweeps (records=...), not to pulses")
+            missing = [q for q in PULSE_QUANTITIES if q not in given]
+            if missing:
+                raise JaxrockInputError(f"a pulse sweep needs {' and '.join(missing)}")
+            pulse = DEFAULT_PULSE if pulse is None else pulse
+            if pulse not in PULSES:
+                raise JaxrockInputError(f"pulse = {pulse!r}; valid: {', '.join(PULSES)}")
+        values = {**DEFAULTS, **given}
+        axes, fixed = {}, {}
+        for name in AXIS_ORDER:
+            if name == "record":
+                if recs:
+                    axes["record"] = np.asarray([r.name for r in recs])
+                continue
+            if name not in values:
+                continue
+            v = np.asarray(values[name], dtype=float)
+            lo, hi, lo_open, hi_open = QUANTITIES[name][2]
+            if v.ndim > 1 or v.size == 0:
+                raise JaxrockInputError(f"{name}: one number or a 1-D sequence of numbers, got shape {v.shape}")
+            check_range(name, v, lo, hi, lo_open=lo_open, hi_open=hi_open)
+            (axes if v.ndim == 1 else fixed)[name] = v if v.ndim == 1 else float(v)
+        ta = np.ravel(axes.get("tan_alpha", fixed.get("tan_alpha")))
+        tb = axes.get("tan_alpha_base", fixed.get("tan_alpha_base"))
+        if tb is not None and np.min(tb) < np.max(ta):
+            raise JaxrockInputError(f"tan_alpha_base = {np.min(tb):g} < tan_alpha = {np.max(ta):g}; valid: every tan_alpha_base >= every tan_alpha")
+        return cls(model=model, axes=axes, fixed=fixed, pulse=pulse, records=recs, backbone=backbone, integrator=integrator,
+                   chunk_size=int(chunk_size))
+
+    # -- the grid and its chunks ------------------------------------------------------------------
+    @property
+    def dims(self) -> tuple[str, ...]:
+        return tuple(self.axes)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(v) for v in self.axes.values())
+
+    @property
+    def size(self) -> int:
+        return math.prod(self.shape)
+
+    @property
+    def chunk_shape(self) -> tuple[int, ...]:
+        """The chunk: the innermost axes whole while they fit `chunk_size`, the next one split, the
+        outer ones (and the record axis) one value at a time."""
+        out, room = [], self.chunk_size
+        for name, n in reversed(list(zip(self.dims, self.shape))):
+            take = 1 if name == "record" else max(1, min(n, room))
+            out.append(take)
+            room = room // n if take == n else 0
+        return tuple(reversed(out))
+
+    @property
+    def chunk_grid(self) -> tuple[int, ...]:
+        return tuple(-(-n // c) for n, c in zip(self.shape, self.chunk_shape))
+
+    @property
+    def n_chunks(self) -> int:
+        return math.prod(self.chunk_grid)
+
+    def chunk_region(self, k: int) -> tuple[slice, ...]:
+        """The grid region of chunk `k` (chunks numbered in C order of the chunk grid)."""
+        at = np.unravel_index(int(k), self.chunk_grid) if self.dims else ()
+        return tuple(slice(i * c, min((i + 1) * c, n)) for i, c, n in zip(at, self.chunk_shape, self.shape))
+
+    def chunk_scenes(self, k: int) -> int:
+        return math.prod(s.stop - s.start for s in self.chunk_region(k))
+
+    def chunk_values(self, k: int) -> dict[str, np.ndarray]:
+        """Per scene of chunk `k` (C order of its region): the value of every quantity the sweep
+        sets (axes and fixed); `record` as an index into `records`."""
+        region = self.chunk_region(k)
+        grids = np.meshgrid(*(np.arange(s.start, s.stop) for s in region), indexing="ij")
+        n = self.chunk_scenes(k)
+        out = {name: np.full(n, v) for name, v in self.fixed.items()}
+        for name, idx in zip(self.dims, grids):
+            out[name] = idx.ravel() if name == "record" else self.axes[name][idx.ravel()]
+        return out
+
+    # -- what made it -----------------------------------------------------------------------------
+    def description(self) -> dict[str, str]:
+        """Everything that determines the sweep's numbers and its store's layout
+        (`jaxrock.io.provenance`): a store made by another description is refused."""
+        from ..io import provenance
+
+        d = {"jaxrock": provenance.package_version(), "model": self.model, "backbone": str(self.backbone),
+             "excitation": self.pulse or "records", "integrator": "the model's default" if self.integrator is None else repr(self.integrator),
+             "chunk_shape": str(self.chunk_shape)}
+        d.update({f"axis {k}": provenance.value_text(v) if k != "record" else ",".join(v) for k, v in self.axes.items()})
+        d.update({f"fixed {k}": repr(v) for k, v in self.fixed.items()})
+        for r in self.records:
+            d[f"record {r.name}"] = provenance.value_text(np.concatenate([np.ravel(r.acc), np.ravel(r.dt)]))
+        return d
+
+    def attrs(self) -> dict:
+        """The store's attributes: how it was made, readable (every fixed value, the integrator,
+        versions) and complete (`made_by`, the `description` as JSON)."""
+        from ..io import provenance
+
+        model = self.template_model()
+        return {
+            "title": f"jaxrock sweep: {self.model} model, {self.pulse + ' pulse' if self.pulse else 'records'}",
+            **provenance.file_attrs(model, self.integrator),
+            "model_kind": self.model,
+            "backbone": str(self.backbone),
+            "excitation": self.pulse or "records",
+            **{f"fixed_{k}": v for k, v in self.fixed.items()},
+            "made_by": provenance.to_json(self.description()),
+        }
+
+    # -- models and excitations -------------------------------------------------------------------
+    def _model_kwargs(self, v: dict, i=slice(None)) -> dict:
+        kw = {k: v[k][i] for k in MODEL_KINDS[self.model].parameters if k in v}
+        if self.backbone is not None:
+            kw["backbone"] = self.backbone
+        return kw
+
+    def template_model(self):
+        """The model of the sweep's first scene (unbatched)."""
+        return self._models(self.chunk_values(0), batched=False)
+
+    def _models(self, v: dict, batched: bool):
+        import jax
+        import jax.numpy as jnp
+
+        from ..geometry import Block
+        from ..io.scenes_file import scene_model
+
+        if not batched:
+            block = Block.from_slenderness(float(v["height"][0]), float(v["tan_alpha"][0]),
+                                           None if "tan_alpha_base" not in v else float(v["tan_alpha_base"][0]))
+            return scene_model(self.model, block, **self._model_kwargs(v, 0))
+        n = len(v["height"])
+        tb = v.get("tan_alpha_base", v["tan_alpha"])
+        block = jax.vmap(Block.from_slenderness)(jnp.asarray(v["height"]), jnp.asarray(v["tan_alpha"]), jnp.asarray(tb))
+        kw = {k: jnp.asarray(x) for k, x in self._model_kwargs(v).items() if k != "backbone"}
+        backbone = {} if self.backbone is None else {"backbone": self.backbone}
+        assert all(x.shape == (n,) for x in kw.values())
+        return jax.vmap(lambda b, kw: scene_model(self.model, b, **kw, **backbone))(block, kw)
+
+    def _excitations(self, v: dict, model, batched: bool):
+        import jax
+        import jax.numpy as jnp
+
+        from ..geometry import pulse_of_ratios
+        from ..scene import pulse_class
+
+        if self.pulse is not None:
+            if batched:
+                a_p, w_p = jax.vmap(pulse_of_ratios)(model.block, jnp.asarray(v["accel_ratio"]), jnp.asarray(v["omega_ratio"]))
+            else:
+                a_p, w_p = pulse_of_ratios(model.block, v["accel_ratio"], v["omega_ratio"])
+            return jax.vmap(pulse_class(self.pulse))(jnp.asarray(a_p), jnp.asarray(w_p))
+        (rec,) = {int(i) for i in v["record"]}  # one record per chunk (`chunk_shape`)
+        scale = v.get("scale", np.ones(len(v["record"])))
+        return jax.vmap(self.records[rec].scaled)(jnp.asarray(scale))
+
+
+def run_chunk(sweep: Sweep, k: int, devices=None) -> dict[str, np.ndarray]:
+    """The summary outputs (and `status`) of chunk `k`, each an array of the chunk's region. One
+    model for the whole chunk when no model quantity varies within it (a spectrum's grid), else
+    one per scene. `devices`: the devices its scenes are sharded over (None: every local one)."""
+    from ..results import status_codes
+    from .engine import run_batch
+
+    v = sweep.chunk_values(k)
+    batched = any(np.unique(v[q]).size > 1 for q in MODEL_QUANTITIES if q in v)
+    model = sweep._models(v, batched)
+    exc = sweep._excitations(v, model, batched)
+    sol = run_batch(model, exc, sweep.integrator, model_batched=batched, devices=devices)
+    shape = tuple(s.stop - s.start for s in sweep.chunk_region(k))
+    out = {name: np.asarray(getattr(sol, name)).reshape(shape) for name in OUTPUTS}
+    out["status"] = np.asarray(status_codes(sol.status)).astype(np.int32).reshape(shape)
+    return out
+
+
+def _store_task(path: str, sweep: Sweep, k: int) -> int:
+    """A Dask task: chunk `k` run on the worker's devices and written to its own region."""
+    from ..io.store import write_chunk
+
+    write_chunk(path, sweep, k, run_chunk(sweep, k))
+    return sweep.chunk_scenes(k)
+
+
+def run_sweep(sweep: Sweep, store=None, *, client=None, devices=None, progress: bool = True, history: str | None = None,
+              on_chunk: Callable[[int], None] | None = None):
+    """Run `sweep` and return its results as an `xarray.Dataset` (dimensions: its axes).
+
+    - `store`: a Zarr store folder (`jaxrock.io.store`): created if missing, else checked
+      (one made by another sweep, or unreadable, is refused with one line) and only its missing
+      chunks run. None: nothing is written and every chunk runs here. `history`: the command, for
+      the attributes of a new store.
+    - `client`: a `dask.distributed.Client`; each missing chunk is a task that writes its own region
+      of the store (a lost worker's chunk is run again by Dask). None: chunks run in this process,
+      sharded over `devices` (None: every local device).
+    - SIGINT / SIGTERM (inside `jaxrock.interrupt.deferred_signals`) stop it after the chunk in
+      progress with `jaxrock.interrupt.Interrupted`; what finished is in the store.
+    - A second run into the same store while one runs is refused (`<store>.lock`).
+    """
+    from ..io import store as zstore
+    from ..io.files import exclusive
+
+    if client is not None and store is None:
+        raise JaxrockInputError("a Dask cluster writes into a store: give store=PATH")
+    with contextlib.ExitStack() as stack:
+        if store is not None:
+            stack.enter_context(exclusive(store, "store"))
+            zstore.open_for(store, sweep, history)
+        return _run(sweep, store, client, devices, progress, on_chunk)
+
+
+def _run(sweep, store, client, devices, progress, on_chunk):
+    """`run_sweep` with its store (if any) made and held."""
+    from tqdm.auto import tqdm
+
+    from .. import interrupt
+    from ..io import store as zstore
+
+    done = zstore.finished(store, sweep) if store is not None else set()
+    todo = [k for k in range(sweep.n_chunks) if k not in done]
+    held = {}
+    bar = tqdm(total=sweep.size, initial=sweep.size - sum(sweep.chunk_scenes(k) for k in todo), unit="scene", desc="sweep",
+               disable=not progress, smoothing=0.1)
+    try:
+        if client is None:
+            for k in todo:
+                interrupt.stop_point()
+                out = run_chunk(sweep, k, devices)
+                if store is None:
+                    held[k] = out
+                else:
+                    zstore.write_chunk(store, sweep, k, out)
+                bar.update(sweep.chunk_scenes(k))
+                if on_chunk is not None:
+                    on_chunk(k)
+        else:
+            _run_on_cluster(client, str(store), sweep, todo, bar, on_chunk)
+    finally:
+        bar.close()
+    if store is None:
+        return zstore.in_memory(sweep, held)
+    return zstore.load(store)
+
+
+def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], bar, on_chunk) -> None:
+    """Every chunk of `todo` as a Dask task (pure: a task run twice writes the same bytes)."""
+    from distributed import as_completed
+
+    from .. import interrupt
+
+    futures = client.map(_store_task, [path] * len(todo), [sweep] * len(todo), list(todo), pure=False, key=[
+        f"jaxrock-chunk-{k}-{time.time_ns()}" for k in todo])
+    by_key = {f.key: k for f, k in zip(futures, todo)}
+    try:
+        for f in as_completed(futures):
+            f.result()  # a task's error is raised here
+            bar.update(sweep.chunk_scenes(by_key[f.key]))
+            if on_chunk is not None:
+                on_chunk(by_key[f.key])
+            interrupt.stop_point()
+    finally:
+        client.cancel(futures)
+
+
+__all__ = ["Sweep", "run_chunk", "run_sweep", "QUANTITIES", "AXIS_ORDER"]

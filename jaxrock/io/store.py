@@ -1,0 +1,160 @@
+"""A sweep's store: xarray on Zarr (format 3), one Zarr chunk per sweep chunk
+(`jaxrock.analyses.sweep`).
+
+Layout (open it with `xarray.open_zarr(path)`, or `load`):
+- the sweep's axes as coordinates (records by name), in the sweep's order;
+- each summary output (`jaxrock.outputs.OUTPUTS`) and `status` (`jaxrock.results.STATUS_NAMES`;
+  -1: not run yet) over the axes, chunked as the sweep is;
+- `chunk_done` (dimension `chunk`): 1 once a chunk's outputs are all written. Zarr writes each chunk
+  file atomically (a temporary renamed), and a chunk counts as finished only once its flag is
+  written after its outputs: a run killed at any moment leaves finished chunks and chunks that a
+  rerun runs again whole, never half a chunk;
+- attributes: how the store was made (`Sweep.attrs`: every fixed value, the integrator, the versions;
+  `made_by`, the full description; `history`, the command). A run into a store made by another
+  description (or an unreadable store) is refused with one line.
+
+Workers of a Dask cluster write their own chunks' files only (no shared metadata is rewritten),
+so that any number write at once.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import JaxrockInputError
+from ..outputs import OUTPUTS
+from ..results import STATUS_NAMES
+from .provenance import refuse_if_different
+
+NOT_RUN = -1  # `status` of a scene whose chunk has not run
+
+
+def _variables() -> dict[str, tuple[np.dtype, object, dict]]:
+    """Each stored output: (dtype, fill value, attributes)."""
+    out = {}
+    for name, o in OUTPUTS.items():
+        dtype = np.dtype(o.dtype)
+        fill = {"float": np.nan, "bool": False, "int": 0}[o.kind]
+        out[name] = (dtype, fill, {"long_name": o.meaning, "units": o.units})
+    out["status"] = (np.dtype(np.int32), NOT_RUN, {"long_name": "jaxrock.Status code (-1: not run yet)",
+                                                    "flag_values": list(range(-1, len(STATUS_NAMES))),
+                                                    "flag_meanings": " ".join(("not_run", *STATUS_NAMES))})
+    return out
+
+
+def _coordinates(sweep) -> dict:
+    from ..scene import SWEEP_QUANTITIES
+
+    coords = {}
+    for name, values in sweep.axes.items():
+        long_name, units, _ = SWEEP_QUANTITIES[name]
+        data = np.asarray(values, dtype=object) if name == "record" else np.asarray(values, dtype=float)  # object: a Zarr v3 string
+        coords[name] = (name, data, {"long_name": long_name, **({"units": units} if units else {})})
+    return coords
+
+
+def _fresh(path: Path) -> str:
+    return f"delete {path} to start afresh, or write another store"
+
+
+def open_for(path, sweep, history: str | None = None) -> None:
+    """Create the store of `sweep` at `path` (written beside and renamed: never half made), or
+    check that the one there was made by the same description. `history`: the command that made
+    it (a CF `history` attribute). The caller holds the store (`jaxrock.io.files.exclusive`)."""
+    path = Path(path)
+    if path.exists():
+        made = _made_by(path)
+        refuse_if_different(made, sweep.description(), f"store {path}", _fresh(path))
+        return
+    import xarray as xr
+    import zarr
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f"tmp_{os.getpid()}_{path.name}")
+    shutil.rmtree(tmp, ignore_errors=True)
+    attrs = {**sweep.attrs(), **({"history": history} if history else {})}
+    xr.Dataset(coords=_coordinates(sweep), attrs=attrs).to_zarr(tmp, mode="w", zarr_format=3, consolidated=False)
+    group = zarr.open_group(tmp, mode="r+")
+    for name, (dtype, fill, var_attrs) in _variables().items():
+        a = group.create_array(name, shape=sweep.shape, chunks=sweep.chunk_shape, dtype=dtype, fill_value=fill,
+                               dimension_names=sweep.dims)
+        a.attrs.update(var_attrs)
+    done = group.create_array("chunk_done", shape=(sweep.n_chunks,), chunks=(1,), dtype=np.int8, fill_value=0,
+                              dimension_names=("chunk",))
+    done.attrs.update({"long_name": "1: the chunk's outputs are all written", "units": "1"})
+    with warnings.catch_warnings():  # "not part of the format 3 specification": xarray reads it, and warns without it
+        warnings.simplefilter("ignore")
+        zarr.consolidate_metadata(tmp, zarr_format=3)  # the metadata never changes after: chunk writes only
+    os.replace(tmp, path)
+
+
+def _made_by(path: Path) -> dict:
+    import zarr
+
+    try:
+        group = zarr.open_group(path, mode="r")
+        made = json.loads(group.attrs["made_by"])
+        if not isinstance(made, dict) or "chunk_done" not in group:
+            raise ValueError("not a jaxrock sweep store")
+    except Exception as e:  # missing metadata, garbled JSON, another kind of folder: one answer
+        raise JaxrockInputError(f"store {path} is unreadable or not a jaxrock sweep ({type(e).__name__}: {e}); {_fresh(path)}") from None
+    return made
+
+
+def finished(path, sweep) -> set[int]:
+    """The chunks whose outputs are all in the store (an unreadable flag counts as not finished)."""
+    import zarr
+
+    done = zarr.open_array(Path(path) / "chunk_done", mode="r")
+    out = set()
+    for k in range(sweep.n_chunks):
+        try:
+            if done[k] == 1:
+                out.add(k)
+        except Exception:
+            pass
+    return out
+
+
+def write_chunk(path, sweep, k: int, outputs: dict[str, np.ndarray]) -> None:
+    """Write chunk `k`'s outputs into its region, then its flag."""
+    import zarr
+
+    group = zarr.open_group(path, mode="r+")
+    region = sweep.chunk_region(k)
+    for name in _variables():
+        group[name][region] = outputs[name]
+    group["chunk_done"][k] = 1
+
+
+def load(path):
+    """The store as an in-memory `xarray.Dataset`."""
+    import xarray as xr
+
+    with xr.open_zarr(path, chunks=None) as ds:
+        return ds.load()
+
+
+def in_memory(sweep, chunks: dict[int, dict]):
+    """The `xarray.Dataset` a store of `sweep` would hold, from chunk outputs kept in memory."""
+    import xarray as xr
+
+    data = {}
+    for name, (dtype, fill, var_attrs) in _variables().items():
+        a = np.full(sweep.shape, fill, dtype=dtype)
+        for k, out in chunks.items():
+            a[sweep.chunk_region(k)] = out[name]
+        data[name] = (sweep.dims, a, var_attrs)
+    flags = np.zeros(sweep.n_chunks, dtype=np.int8)
+    flags[list(chunks)] = 1
+    data["chunk_done"] = (("chunk",), flags, {"long_name": "1: the chunk's outputs are all written", "units": "1"})
+    return xr.Dataset(data, coords=_coordinates(sweep), attrs=sweep.attrs())
+
+
+__all__ = ["NOT_RUN", "finished", "in_memory", "load", "open_for", "write_chunk"]

@@ -1,0 +1,193 @@
+"""Sweeps (`jaxrock.analyses.sweep`, `jaxrock sweep`): the same numbers as the spectra and as single
+runs, a store that survives real signals and resumes to the same bits, refusals in one line, the
+scenes sharded over forced host devices and spread over a real Dask cluster with the same bits."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+import xarray as xr
+from helpers import Watch, invoke, jaxrock_process
+
+import jaxrock as jr
+from jaxrock.analyses.sweep import Sweep, run_sweep
+from jaxrock.outputs import OUTPUTS
+
+FIELDS = (*OUTPUTS, "status")
+
+
+def _same(a: xr.Dataset, b: xr.Dataset):
+    """Every output and coordinate of two sweeps equal bit for bit (NaN where NaN)."""
+    for name in (*FIELDS, *a.coords):
+        x, y = a[name].values, b[name].values
+        assert x.dtype == y.dtype and x.shape == y.shape, name
+        if x.dtype.kind == "f":
+            assert np.array_equal(x.view(np.int64), y.view(np.int64)), f"{name} differs"
+        else:
+            assert np.array_equal(x, y), f"{name} differs"
+
+
+def _short_record(seconds: float, name: str, dt=0.01):
+    """A record a rigid block rocks under within its few seconds (one sine cycle of 2 Hz, 0.5 g)."""
+    t = np.arange(0.0, seconds, dt)
+    acc = np.where(t < 0.5, 0.5 * jr.G * np.sin(4 * np.pi * t), 0.0)
+    return jr.Record(acc, dt, name=name)
+
+
+def test_pulse_sweep_is_the_spectrum(tmp_path):
+    """A pulse sweep of one model, in chunks of 8 cells, is `overturning_spectrum` bit for bit; the
+    store holds what the in-memory run returns, and says how it was made."""
+    wr, ar = np.linspace(1.0, 12.0, 6), np.linspace(0.8, 8.0, 5)
+    model = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
+    spec = jr.overturning_spectrum(model, wr, ar, progress=False)
+    sw = Sweep.make("rigid", accel_ratio=ar, omega_ratio=wr, chunk_size=8)
+    assert sw.chunk_shape == (1, 6) and sw.n_chunks == 5
+    mem = run_sweep(sw, progress=False)
+    for name in FIELDS:
+        got, want = mem[name].values, getattr(spec, name)
+        assert np.array_equal(got, want, equal_nan=got.dtype.kind == "f"), name
+    stored = run_sweep(sw, tmp_path / "s.zarr", progress=False)
+    _same(stored, mem)
+    made = json.loads(stored.attrs["made_by"])
+    assert made["model"] == "rigid" and made["fixed height"] == "10.0" and made["excitation"] == "symmetric"
+    assert stored.attrs["jax_version"] and stored.chunk_done.values.tolist() == [1] * 5
+    assert xr.open_zarr(tmp_path / "s.zarr").max_theta.encoding["chunks"] == (1, 6)  # one Zarr chunk per sweep chunk
+
+
+def test_record_sweep_over_sizes_matches_single_runs():
+    """Two records of different lengths × 2 sizes × 2 slendernesses × 2 factors, a chunk holding
+    several models (vmapped models): each scene as `jaxrock.simulate` gives it (to the event
+    integrator's round-off), flags consistent with max θ/α."""
+    recs = [_short_record(3.0, "short"), _short_record(4.5, "long")]
+    sw = Sweep.make("rigid", records=recs, height=[1.0, 4.0], tan_alpha=[0.1, 0.2], scale=[0.6, 1.4], chunk_size=8)
+    assert sw.dims == ("record", "height", "tan_alpha", "scale") and sw.chunk_shape == (1, 2, 2, 2)
+    ds = run_sweep(sw, progress=False)
+    assert (ds.status.values == 0).all()
+    assert ds.overturned.any() and (~ds.overturned).any() and ds.uplifted.any()
+    assert np.array_equal(ds.overturned.values, ds.max_theta.values == 1.0)
+    for i, rec in enumerate(recs):
+        for j, h in enumerate(sw.axes["height"]):
+            for k, ta in enumerate(sw.axes["tan_alpha"]):
+                for m, s in enumerate(sw.axes["scale"]):
+                    sol = jr.simulate(jr.RigidModel(jr.Block.from_slenderness(h, ta)), rec.scaled(s))
+                    cell = ds.isel(record=i, height=j, tan_alpha=k, scale=m)
+                    assert bool(cell.overturned) == bool(sol.overturned)
+                    assert float(cell.max_theta) == pytest.approx(float(sol.max_theta), abs=1e-9)
+
+
+def test_sweep_refuses_bad_values_in_one_line(tmp_path):
+    for args, words in (
+        (["--tan-alpha", "0.2,1.5"], "tan_alpha"),
+        (["--eta", "0.5"], "--eta applies to --model rigid"),  # fine for rigid: no error expected below
+        (["--model", "spring", "--eta", "0.5"], "--eta applies to --model rigid only"),
+        (["--scale", "2"], "--scale applies to record sweeps"),
+        (["--records", str(tmp_path)], "holds no record file"),
+        (["--accel-ratio", "0,1"], "accel_ratio"),
+        (["--height", "5", "--tan-alpha", "0.3", "--tan-alpha-base", "0.2"], "tan_alpha_base"),
+    ):
+        if args == ["--eta", "0.5"]:
+            continue
+        r = invoke("sweep", *args, "--store", str(tmp_path / "x.zarr"))
+        assert r.exit_code == 2, (args, r.output)
+        assert words in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert not (tmp_path / "x.zarr").exists()
+
+
+SWEEP = ["sweep", "--accel-ratio", "0.8:8:6", "--omega-ratio", "1:12:6", "--chunk-size", "1", "-q"]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT])
+def test_killed_sweep_resumes_to_the_same_bits(tmp_path, sig):
+    """A real `jaxrock sweep` process stopped by a real signal after its first chunks (SIGINT: at the
+    next chunk, exit 130 and the resume command; SIGKILL: at once), then rerun with the same
+    command: the store equals an uninterrupted run's, bit for bit."""
+    whole = tmp_path / "whole.zarr"
+    rc = jaxrock_process(*SWEEP, "--store", whole, cwd=tmp_path).wait(240)
+    assert rc == 0
+    cut = tmp_path / "cut.zarr"
+    w = Watch(jaxrock_process(*SWEEP[:-1], "--store", cut, cwd=tmp_path))  # with its progress bar, to see it run
+    w.wait_for(r"\b([2-9]|1[0-9])/36")
+    w.proc.send_signal(sig)
+    rc, out, err = w.finish()
+    kept = int(xr.open_zarr(cut).chunk_done.sum())
+    assert 0 < kept < 36, f"the stop came too late or too early: {kept} of 36 chunks"
+    if sig == signal.SIGINT:
+        assert rc == 130 and f"interrupted: {kept} of 36 chunks kept in" in err and "resume with: jaxrock sweep" in err
+    else:
+        assert rc == -signal.SIGKILL
+    rc = jaxrock_process(*SWEEP, "--store", cut, cwd=tmp_path).wait(240)
+    assert rc == 0
+    a, b = xr.open_zarr(whole, chunks=None), xr.open_zarr(cut, chunks=None)
+    _same(a, b)
+    assert a.attrs["made_by"] == b.attrs["made_by"]
+
+
+def test_store_of_another_sweep_or_garbled_is_refused(tmp_path):
+    store = tmp_path / "s.zarr"
+    r = invoke(*SWEEP, "--store", str(store))
+    assert r.exit_code == 0, r.output
+    r = invoke(*SWEEP, "--tan-alpha", "0.25", "--store", str(store))
+    assert r.exit_code == 2 and "was made by a different run (fixed tan_alpha: 0.2 → 0.25)" in r.output, r.output
+    (store / "zarr.json").write_text("{ not json")
+    r = invoke(*SWEEP, "--store", str(store))
+    assert r.exit_code == 2 and "is unreadable or not a jaxrock sweep" in r.output and len(r.output.strip().splitlines()) == 1
+
+
+_SHARDED = textwrap.dedent("""
+    import jax, numpy as np
+    import jaxrock as jr
+    from jaxrock.analyses import kernels
+    from jaxrock.analyses.sweep import Sweep, run_sweep
+    assert len(jax.local_devices()) == 4
+    for sw in (Sweep.make("rigid", height=[2.0, 8.0], accel_ratio=np.linspace(0.8, 8, 5), omega_ratio=np.linspace(1, 12, 6)),
+               Sweep.make("spring", accel_ratio=[1.5, 4.0, 7.0], omega_ratio=np.linspace(2, 10, 5))):
+        one = run_sweep(sw, devices=jax.local_devices()[:1], progress=False)
+        four = run_sweep(sw, progress=False)
+        for name in ("max_theta", "t_uplift", "t_overturn", "overturned", "uplifted", "n_impacts", "status"):
+            x, y = one[name].values, four[name].values
+            assert np.array_equal(x.view(np.uint8), y.view(np.uint8)), (sw.model, name)
+        assert (one.status.values == 0).all() and one.overturned.any()
+    assert any(key[1] is not None and key[1].size == 4 for key in kernels._KERNELS if isinstance(key, tuple) and len(key) == 2)
+    print("SAME BITS")
+""")
+
+
+def test_sharded_over_four_host_devices_is_bit_identical():
+    """Chunks sharded over 4 forced host devices (`NamedSharding` of a 1-D mesh) give one device's
+    bits: the rigid model with a model per scene, the quasi-rigid spring model (refilled lanes)."""
+    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=4", "JAX_PLATFORMS": "cpu"}
+    r = subprocess.run([sys.executable, "-c", _SHARDED], env=env, capture_output=True, text=True, timeout=280)
+    assert r.returncode == 0 and "SAME BITS" in r.stdout, r.stderr[-3000:]
+
+
+def test_dask_cluster_writes_the_same_store_even_when_a_worker_is_killed(tmp_path):
+    """A `LocalCluster` of two worker processes on 127.0.0.1 writes the store one process writes,
+    bit for bit; a worker killed by SIGKILL while chunks are in flight has its chunks run again."""
+    distributed = pytest.importorskip("distributed")
+    sw = Sweep.make("rigid", height=[3.0, 9.0], accel_ratio=np.linspace(0.8, 8, 4), omega_ratio=np.linspace(1, 12, 4), chunk_size=4)
+    assert sw.n_chunks == 8
+    here = run_sweep(sw, tmp_path / "here.zarr", progress=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        there = run_sweep(sw, tmp_path / "cluster.zarr", client=client, progress=False)
+        _same(here, there)
+        pids = list(client.run(os.getpid).values())
+        assert len(set(pids)) == 2 and os.getpid() not in pids
+        seen = []
+
+        def kill_one(k):
+            seen.append(k)
+            if len(seen) == 1:
+                os.kill(pids[0], signal.SIGKILL)
+
+        again = run_sweep(sw, tmp_path / "killed.zarr", client=client, progress=False, on_chunk=kill_one)
+        assert len(seen) == 8
+        assert len(set(client.run(os.getpid).values()) & set(pids)) == 1  # the killed worker was replaced
+    _same(here, again)
