@@ -1,6 +1,8 @@
 """Overturning spectra: physics of the boundary lines, agreement with single runs, storage, and
 resuming an interrupted run without recomputing finished batches."""
 
+import shutil
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -8,7 +10,7 @@ import pytest
 
 import jaxrock as jr
 from jaxrock import JaxrockInputError
-from jaxrock.analyses import spectra
+from jaxrock.analyses import spectra, sweep
 from jaxrock.analyses.engine import run_batch
 
 W = np.linspace(1.0, 15.0, 6)
@@ -60,7 +62,7 @@ def test_grid_passes_and_refinement_share_the_ladder_sizes(model, monkeypatch):
         assert 1 <= b <= limit and (b == n or b == limit or -(-n // b) >= 4), (n, limit, b)
     sizes = set()
     advance = kernels.advance
-    monkeypatch.setattr(kernels, "advance", lambda s, e, c, n, batched: sizes.add(e.a_p.shape[0]) or advance(s, e, c, n, batched))
+    monkeypatch.setattr(kernels, "advance", lambda s, e, c, n, batched, mesh=None: sizes.add(e.a_p.shape[0]) or advance(s, e, c, n, batched, mesh))
     jr.overturning_spectrum(model, W, A, progress=False, refine=3)
     assert sizes == {64}
 
@@ -83,7 +85,7 @@ def test_interrupted_run_resumes_without_recomputing_finished_batches(model, tmp
     ck = tmp_path / "spec.checkpoint"
     full = jr.overturning_spectrum(model, W, A, progress=False, batch_size=12)
     calls, killed = [], []
-    real = spectra.run_batch
+    real = sweep.run_batch
 
     def dies_on_second_batch(*args, **kw):
         calls.append(1)
@@ -92,7 +94,7 @@ def test_interrupted_run_resumes_without_recomputing_finished_batches(model, tmp
             raise _Killed
         return real(*args, **kw)
 
-    monkeypatch.setattr(spectra, "run_batch", dies_on_second_batch)
+    monkeypatch.setattr(sweep, "run_batch", dies_on_second_batch)
     with pytest.raises(_Killed):
         jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck)
     assert ck.exists()
@@ -104,7 +106,7 @@ def test_interrupted_run_resumes_without_recomputing_finished_batches(model, tmp
 
 def _interrupted_checkpoint(model, ck, monkeypatch, **kw):
     """A checkpoint left by a run killed in its second batch (one of three done)."""
-    real = spectra.run_batch
+    real = sweep.run_batch
     calls = []
 
     def dies_on_second_batch(*args, **kwargs):
@@ -113,10 +115,10 @@ def _interrupted_checkpoint(model, ck, monkeypatch, **kw):
             raise _Killed
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(spectra, "run_batch", dies_on_second_batch)
+    monkeypatch.setattr(sweep, "run_batch", dies_on_second_batch)
     with pytest.raises(_Killed):
         jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck, **kw)
-    monkeypatch.setattr(spectra, "run_batch", real)
+    monkeypatch.setattr(sweep, "run_batch", real)
     assert ck.exists()
 
 
@@ -142,23 +144,23 @@ def test_checkpoint_of_other_physics_is_refused_naming_what_differs(model, tmp_p
     assert "delete" in str(e.value) and ck.exists()
 
 
-@pytest.mark.parametrize("damage", ["a file", "garbled description", "truncated batch", "batch without keys"])
+@pytest.mark.parametrize("damage", ["a file", "garbled description", "truncated batch", "batch without an output"])
 def test_unreadable_checkpoint_is_refused_in_one_line(model, tmp_path, monkeypatch, damage):
     ck = tmp_path / "spec.checkpoint"
     if damage == "a file":
         ck.write_bytes(b"PK\x03\x04truncated")
     else:
         _interrupted_checkpoint(model, ck, monkeypatch)
-        batch = next(ck.glob("batch_*.npz"))
         if damage == "garbled description":
-            (ck / "made_by.json").write_text("{not json")
-        elif damage == "truncated batch":
-            batch.write_bytes(batch.read_bytes()[:100])
+            (ck / "zarr.json").write_text("{not json")
+        elif damage == "truncated batch":  # the finished chunk's file of max_theta
+            (chunk,) = [f for f in (ck / "max_theta").rglob("*") if f.is_file() and f.name != "zarr.json"]
+            chunk.write_bytes(chunk.read_bytes()[:5])
         else:
-            np.savez(batch, start=0, stop=12)
-    with pytest.raises(JaxrockInputError, match="checkpoint .*(is unreadable|lacks|no readable description made_by.json)") as e:
+            shutil.rmtree(ck / "max_theta")
+    with pytest.raises(JaxrockInputError, match="store .*spec.checkpoint.* is unreadable") as e:
         jr.overturning_spectrum(model, W, A, progress=False, batch_size=12, checkpoint=ck)
-    assert "\n" not in str(e.value) and "delete" in str(e.value)
+    assert "\n" not in str(e.value) and "delete" in str(e.value), str(e.value)
 
 
 @pytest.mark.parametrize(

@@ -56,7 +56,8 @@ def test_pulse_sweep_is_the_spectrum(tmp_path):
     stored = run_sweep(sw, tmp_path / "s.zarr", progress=False)
     _same(stored, mem)
     made = json.loads(stored.attrs["made_by"])
-    assert made["model"] == "rigid" and made["fixed height"] == "10.0" and made["excitation"] == "symmetric"
+    assert made["model kind"] == "rigid" and made["fixed height"] == "10.0" and made["excitation"] == "RickerPulse"
+    assert made["model.eta"] == str(np.asarray(model.eta)) and "12." in made["grid omega_ratio"]
     assert stored.attrs["jax_version"] and stored.chunk_done.values.tolist() == [1] * 5
     assert xr.open_zarr(tmp_path / "s.zarr").max_theta.encoding["chunks"] == (1, 6)  # one Zarr chunk per sweep chunk
 
@@ -134,7 +135,8 @@ def test_store_of_another_sweep_or_garbled_is_refused(tmp_path):
     r = invoke(*SWEEP, "--store", str(store))
     assert r.exit_code == 0, r.output
     r = invoke(*SWEEP, "--tan-alpha", "0.25", "--store", str(store))
-    assert r.exit_code == 2 and "was made by a different run (fixed tan_alpha: 0.2 → 0.25)" in r.output, r.output
+    assert r.exit_code == 2 and "was made by a different run (fixed tan_alpha: 0.2 → 0.25, model.block.b: 1. → 1.25" in r.output, r.output
+    assert len(r.output.strip().splitlines()) == 1
     (store / "zarr.json").write_text("{ not json")
     r = invoke(*SWEEP, "--store", str(store))
     assert r.exit_code == 2 and "is unreadable or not a jaxrock sweep" in r.output and len(r.output.strip().splitlines()) == 1

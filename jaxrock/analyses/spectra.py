@@ -1,14 +1,14 @@
 """Overturning spectra: max |θ|/α′ over a grid of (ω_p/p′, a_p/(g tanα′)), by `vmap`.
 
-In these coordinates the rigid spectrum depends on α′ only (SPEC "Spectra"). The grid is run in
-batches of `batch_size` cells (memory stays bounded) by the batch engine (`jaxrock.analyses.engine`:
-the model's stepper, the running cells gathered between passes). A `checkpoint` file keeps finished
-batches: an interrupted run resumes where it stopped.
+In these coordinates the rigid spectrum depends on α′ only (SPEC "Spectra"). The grid is a sweep
+(`jaxrock.analyses.sweep`) of one model over a_p/(g tanα′) × ω_p/p′, run in batches of `batch_size`
+cells (memory stays bounded) by the batch engine (`jaxrock.analyses.engine`: the model's stepper,
+the running cells gathered between passes). A `checkpoint` store keeps finished batches: an
+interrupted run resumes where it stopped.
 """
 
 from __future__ import annotations
 
-import contextlib
 import os
 import shutil
 from pathlib import Path
@@ -23,12 +23,13 @@ from .. import interrupt
 from .._validate import JaxrockInputError, check_grid
 from ..excitation import Record
 from ..io import provenance
-from ..io.files import exclusive, write_atomically
+from ..io.files import write_atomically
 from ..model import AbstractIntegrator, AbstractModel
-from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module, status_codes
+from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module
 from ..geometry import pulse_of_ratios
 from ..scene import AXES, DEFAULT_PULSE, pulse_class
 from .engine import batch_limit, even_batches, make_stepper, run_batch
+from .sweep import Sweep, run_sweep
 
 
 def _flags(long_name: str, meanings, dtype=np.int8) -> dict:
@@ -164,14 +165,15 @@ def overturning_spectrum(
     - `pulse`: a pulse kind's name (`jaxrock.scene.PULSES`: "symmetric" Ricker, "antisymmetric"
       eq. 29) or a pulse class.
     - `batch_size`: the most cells run together in one vmapped batch (memory bound); the grid is
-      split into batches of a size the batch engine's passes share (`engine.even_batches`).
-    - `checkpoint`: a folder where each finished batch is added as its own file (nothing is
-      rewritten); rerunning the same call after an interruption resumes from it, and it is
-      removed when the spectrum (with its refinement) is complete, unless `keep_checkpoint`
-      (the caller removes it once the result is saved: the CLI does). It records
-      what made it (`jaxrock.io.provenance`): one of another run (model, parameters, pulse, grid,
-      integrator, version) or an unreadable one is refused with a `JaxrockInputError`, and so
-      is one that another run is writing (`<checkpoint>.lock`).
+      split into batches of about the size the batch engine's passes share (`engine.even_batches`),
+      whole rows of ω_p/p′: the chunks of a sweep (`jaxrock.analyses.sweep`), which runs it.
+    - `checkpoint`: the sweep's Zarr store (`jaxrock.io.store`): each finished batch is written
+      into it as its own chunk; rerunning the same call after an interruption resumes from it,
+      and it is removed when the spectrum (with its refinement) is complete, unless
+      `keep_checkpoint` (the caller removes it once the result is saved: the CLI does). It
+      records what made it (`jaxrock.io.provenance`): one of another run (model, parameters,
+      pulse, grid, integrator, version) or an unreadable one is refused with a
+      `JaxrockInputError`, and so is one that another run is writing (`<checkpoint>.lock`).
     - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
     """
     wr = check_grid("omega_ratio (omega_p/p)", omega_ratio)
@@ -180,47 +182,13 @@ def overturning_spectrum(
         raise JaxrockInputError(f"batch_size = {batch_size}; valid: an integer >= 1")
     cls = pulse_class(pulse)
     ck = Path(checkpoint) if checkpoint is not None else None
-    with contextlib.ExitStack() as stack:
-        if ck is not None:
-            stack.enter_context(exclusive(ck, "checkpoint"))
-        return _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_checkpoint, refine, pulse)
-
-
-def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_checkpoint, refine, pulse) -> Spectrum:
-    """`overturning_spectrum` on checked arguments, its checkpoint (if any) held."""
-    block = model.block
-    W, A = np.meshgrid(wr, ar)
-    a_p, w_p = (np.asarray(x).ravel() for x in pulse_of_ratios(block, A, W))
-    n = a_p.size
-    fields = (*OUTPUTS, "status")
-    out = {name: np.zeros(n, dtype=o.dtype) for name, o in OUTPUTS.items()} | {"status": np.zeros(n, dtype=np.int32)}
-    done = np.zeros(n, dtype=bool)
-    made_by = provenance.describe(model=model, excitation=cls.__name__, integrator=integrator,
-                                  grid={"omega_ratio": wr, "accel_ratio": ar})
-    if ck is not None and ck.exists():
-        for cells, saved in provenance.load_checkpoint(ck, made_by, fields):
-            done[cells] = True
-            for k in fields:
-                out[k][cells] = saved[k]
+    n = wr.size * ar.size
     integ = model.default_integrator() if integrator is None else integrator
     stepper = make_stepper(model, integ, False)  # compiled once, reused by run_batch (the same call)
-    batch_size = even_batches(n, min(int(batch_size), batch_limit(stepper)), stepper.schedule.batch_unit)
-    starts = [s for s in range(0, n, batch_size) if not done[s : s + batch_size].all()]
-    bar = tqdm(total=n, initial=int(done.sum()), unit="cell", desc="spectrum", disable=not progress)
-    for s in starts:
-        interrupt.stop_point()
-        sl = slice(s, min(s + batch_size, n))
-        exc = jax.vmap(cls)(jnp.asarray(a_p[sl]), jnp.asarray(w_p[sl]))
-        sol = run_batch(model, exc, integrator)
-        for name in OUTPUTS:
-            out[name][sl] = np.asarray(getattr(sol, name))
-        out["status"][sl] = np.asarray(status_codes(sol.status))
-        done[sl] = True
-        if ck is not None:
-            provenance.append_checkpoint(ck, made_by, sl, {k: out[k][sl] for k in fields})
-        bar.update(sl.stop - sl.start)
-    bar.close()
-    shape = (ar.size, wr.size)
+    chunk = even_batches(n, min(int(batch_size), batch_limit(stepper)), stepper.schedule.batch_unit)
+    sweep = Sweep.make(model, pulse=cls, accel_ratio=ar, omega_ratio=wr, integrator=integrator, chunk_size=chunk)
+    ds = run_sweep(sweep, ck, progress=progress)
+    block = model.block
     attrs = {
         "model": type(model).__name__,
         "pulse": cls.__name__,
@@ -231,9 +199,10 @@ def _spectrum(model, wr, ar, cls, integrator, batch_size, progress, ck, keep_che
         "height": float(block.height),
         "width": float(block.width),
         **provenance.file_attrs(model, integrator),
-        "made_by": provenance.to_json(made_by),
+        "made_by": ds.attrs["made_by"],
     }
-    spec = Spectrum(omega_ratio=wr, accel_ratio=ar, **{k: v.reshape(shape) for k, v in out.items()}, attrs=attrs)
+    spec = Spectrum(omega_ratio=wr, accel_ratio=ar, **{k: ds[k].values.astype(OUTPUTS[k].dtype if k in OUTPUTS else np.int32)
+                                                      for k in (*OUTPUTS, "status")}, attrs=attrs)
     if int(refine) > 0:
         spec = refine_boundaries(model, spec, pulse=pulse, iterations=int(refine), integrator=integrator)
     if ck is not None and ck.exists() and not keep_checkpoint:

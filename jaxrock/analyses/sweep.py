@@ -29,6 +29,7 @@ import numpy as np
 from .._validate import JaxrockInputError, check_range
 from ..outputs import OUTPUTS
 from ..scene import DEFAULT_PULSE, MODEL_KINDS, PULSES, SWEEP_QUANTITIES, model_kinds, takes
+from .engine import batch_limit, make_stepper, run_batch
 
 QUANTITIES = SWEEP_QUANTITIES
 AXIS_ORDER = tuple(QUANTITIES)  # a store's dimensions, outermost first
@@ -42,10 +43,10 @@ DEFAULTS = {"height": 10.0, "tan_alpha": 0.2}  # the rest: the model kind's own 
 class Sweep:
     """Every scene of a product of axes (module docstring). Build with `Sweep.make`.
 
-    - `model`: a model kind (`jaxrock.scene.model_kinds()`); `backbone` its spring backbone name
-      (spring kinds; None: the default);
+    - `model`: a model kind (`jaxrock.scene.model_kinds()`), or a model value (`overturning_spectrum`
+      runs one); `backbone` the spring backbone name of a spring kind (None: the default);
     - `axes`: quantity → values (at least one), in `AXIS_ORDER`; `fixed`: quantity → one value;
-    - `pulse`: the Ricker pulse kind (pulse sweeps), or None with `records` (record sweeps:
+    - `pulse`: the Ricker pulse kind or class (pulse sweeps), or None with `records` (record sweeps:
       `axes["record"]` holds their names);
     - `integrator`: None (the model's default) or an integrator;
     - `chunk_size`: the most scenes of one chunk.
@@ -61,13 +62,21 @@ class Sweep:
     chunk_size: int = 4096
 
     @classmethod
-    def make(cls, model: str = "rigid", *, pulse: str | None = None, records=None, backbone: str | None = None,
+    def make(cls, model="rigid", *, pulse=None, records=None, backbone: str | None = None,
              integrator=None, chunk_size: int = 4096, **quantities) -> "Sweep":
         """A checked sweep: each keyword of `QUANTITIES` is one number (fixed) or a sequence (an
-        axis). Pulse sweeps take `accel_ratio` and `omega_ratio` (both required); record sweeps
-        take `records` (a `jaxrock.Record` or a sequence of them) and `scale` (default 1).
-        Every value is checked here, naming the quantity and its valid range."""
-        if model not in MODEL_KINDS:
+        axis). Pulse sweeps take `accel_ratio` and `omega_ratio` (both required; `pulse` a pulse
+        kind's name or class); record sweeps take `records` (a `jaxrock.Record` or a sequence of
+        them) and `scale` (default 1). `model` is a model kind, or a model (a value: every scene
+        runs it, and no model quantity may vary). Every value is checked here, naming the
+        quantity and its valid range."""
+        from ..model import AbstractModel
+
+        if isinstance(model, AbstractModel):
+            varied = sorted(set(quantities) & set(MODEL_QUANTITIES)) + (["backbone"] if backbone is not None else [])
+            if varied:
+                raise JaxrockInputError(f"{', '.join(varied)}: set by the model given; name a model kind to vary them")
+        elif model not in MODEL_KINDS:
             raise JaxrockInputError(f"model = {model!r}; valid: {', '.join(model_kinds())}")
         unknown = sorted(set(quantities) - set(QUANTITIES) - {"record"})
         if unknown or "record" in quantities:
@@ -77,9 +86,9 @@ class Sweep:
             raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
         given = {k: v for k, v in quantities.items() if v is not None}
         for name in given:
-            if name in MODEL_QUANTITIES[3:] and model not in takes(name):
+            if name in MODEL_QUANTITIES[3:] and isinstance(model, str) and model not in takes(name):
                 raise JaxrockInputError(f"{name} applies to model {' / '.join(takes(name))} only, not {model}")
-        if backbone is not None and "backbone" not in MODEL_KINDS[model].parameters:
+        if backbone is not None and isinstance(model, str) and "backbone" not in MODEL_KINDS[model].parameters:
             raise JaxrockInputError(f"backbone applies to the spring models only, not {model}")
         recs = () if records is None else (tuple(records) if isinstance(records, (list, tuple)) else (records,))
         if recs:
@@ -95,9 +104,9 @@ class Sweep:
             if missing:
                 raise JaxrockInputError(f"a pulse sweep needs {' and '.join(missing)}")
             pulse = DEFAULT_PULSE if pulse is None else pulse
-            if pulse not in PULSES:
+            if isinstance(pulse, str) and pulse not in PULSES:
                 raise JaxrockInputError(f"pulse = {pulse!r}; valid: {', '.join(PULSES)}")
-        values = {**DEFAULTS, **given}
+        values = {**(DEFAULTS if isinstance(model, str) else {}), **given}
         axes, fixed = {}, {}
         for name in AXIS_ORDER:
             if name == "record":
@@ -112,7 +121,7 @@ class Sweep:
                 raise JaxrockInputError(f"{name}: one number or a 1-D sequence of numbers, got shape {v.shape}")
             check_range(name, v, lo, hi, lo_open=lo_open, hi_open=hi_open)
             (axes if v.ndim == 1 else fixed)[name] = v if v.ndim == 1 else float(v)
-        ta = np.ravel(axes.get("tan_alpha", fixed.get("tan_alpha")))
+        ta = axes.get("tan_alpha", fixed.get("tan_alpha"))
         tb = axes.get("tan_alpha_base", fixed.get("tan_alpha_base"))
         if tb is not None and np.min(tb) < np.max(ta):
             raise JaxrockInputError(f"tan_alpha_base = {np.min(tb):g} < tan_alpha = {np.max(ta):g}; valid: every tan_alpha_base >= every tan_alpha")
@@ -176,10 +185,11 @@ class Sweep:
         (`jaxrock.io.provenance`): a store made by another description is refused."""
         from ..io import provenance
 
-        d = {"jaxrock": provenance.package_version(), "model": self.model, "backbone": str(self.backbone),
-             "excitation": self.pulse or "records", "integrator": "the model's default" if self.integrator is None else repr(self.integrator),
-             "chunk_shape": str(self.chunk_shape)}
-        d.update({f"axis {k}": provenance.value_text(v) if k != "record" else ",".join(v) for k, v in self.axes.items()})
+        d = provenance.describe(model=self.template_model(), excitation=self.excitation, integrator=self.integrator,
+                                grid={k: v for k, v in self.axes.items() if k != "record"})
+        d.update({"model kind": self.kind, "backbone": str(self.backbone), "chunk_shape": str(self.chunk_shape)})
+        if "record" in self.axes:
+            d["grid record"] = ",".join(self.axes["record"])
         d.update({f"fixed {k}": repr(v) for k, v in self.fixed.items()})
         for r in self.records:
             d[f"record {r.name}"] = provenance.value_text(np.concatenate([np.ravel(r.acc), np.ravel(r.dt)]))
@@ -192,14 +202,26 @@ class Sweep:
 
         model = self.template_model()
         return {
-            "title": f"jaxrock sweep: {self.model} model, {self.pulse + ' pulse' if self.pulse else 'records'}",
+            "title": f"jaxrock sweep: {self.kind} model, {self.excitation}",
             **provenance.file_attrs(model, self.integrator),
-            "model_kind": self.model,
+            "model_kind": self.kind,
             "backbone": str(self.backbone),
-            "excitation": self.pulse or "records",
+            "excitation": self.excitation,
             **{f"fixed_{k}": v for k, v in self.fixed.items()},
             "made_by": provenance.to_json(self.description()),
         }
+
+    @property
+    def kind(self) -> str:
+        """The model kind's name, or the class name of a model given as a value."""
+        return self.model if isinstance(self.model, str) else type(self.model).__name__
+
+    @property
+    def excitation(self) -> str:
+        """The pulse class's name (`RickerPulse`, ...), or "records"."""
+        from ..scene import pulse_class
+
+        return "records" if self.pulse is None else pulse_class(self.pulse).__name__
 
     # -- models and excitations -------------------------------------------------------------------
     def _model_kwargs(self, v: dict, i=slice(None)) -> dict:
@@ -219,6 +241,8 @@ class Sweep:
         from ..geometry import Block
         from ..io.scenes_file import scene_model
 
+        if not isinstance(self.model, str):
+            return self.model
         if not batched:
             block = Block.from_slenderness(float(v["height"][0]), float(v["tan_alpha"][0]),
                                            None if "tan_alpha_base" not in v else float(v["tan_alpha_base"][0]))
@@ -253,17 +277,27 @@ def run_chunk(sweep: Sweep, k: int, devices=None) -> dict[str, np.ndarray]:
     """The summary outputs (and `status`) of chunk `k`, each an array of the chunk's region. One
     model for the whole chunk when no model quantity varies within it (a spectrum's grid), else
     one per scene. `devices`: the devices its scenes are sharded over (None: every local one)."""
+    import jax
+
     from ..results import status_codes
-    from .engine import run_batch
 
     v = sweep.chunk_values(k)
     batched = any(np.unique(v[q]).size > 1 for q in MODEL_QUANTITIES if q in v)
     model = sweep._models(v, batched)
     exc = sweep._excitations(v, model, batched)
-    sol = run_batch(model, exc, sweep.integrator, model_batched=batched, devices=devices)
+    n = sweep.chunk_scenes(k)
+    integ = model.default_integrator() if sweep.integrator is None else sweep.integrator
+    limit = batch_limit(make_stepper(model, integ, batched)) if n > 64 else n  # the running state's memory bound
+    take = lambda tree, sl: jax.tree_util.tree_map(lambda x: x[sl], tree)
+    parts = []
+    for lo in range(0, n, limit):
+        sl = slice(lo, min(lo + limit, n))
+        m = take(model, sl) if batched else model
+        sol = run_batch(m, take(exc, sl), sweep.integrator, model_batched=batched, devices=devices)
+        parts.append({name: np.asarray(getattr(sol, name)) for name in OUTPUTS} | {"status": np.asarray(status_codes(sol.status))})
     shape = tuple(s.stop - s.start for s in sweep.chunk_region(k))
-    out = {name: np.asarray(getattr(sol, name)).reshape(shape) for name in OUTPUTS}
-    out["status"] = np.asarray(status_codes(sol.status)).astype(np.int32).reshape(shape)
+    out = {name: np.concatenate([p[name] for p in parts]).reshape(shape) for name in parts[0]}
+    out["status"] = out["status"].astype(np.int32)
     return out
 
 

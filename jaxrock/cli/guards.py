@@ -98,11 +98,10 @@ def _resume_command(extra: str | None = None) -> str:
 
 def _interrupted(ck: Optional[Path], n_cells: int):
     """A stop asked by a signal: remove half-written files, say what is kept and how to resume; exit 130."""
-    from ..io.provenance import checkpoint_cells, remove_temporaries
+    from ..io.store import kept_scenes
 
     if ck is not None and ck.is_dir():
-        remove_temporaries(ck)
-        kept = checkpoint_cells(ck)
+        kept = kept_scenes(ck)
         typer.echo(f"interrupted: {kept:,} of {n_cells:,} cells kept in {ck}; resume with: {_resume_command()}", err=True)
     else:
         typer.echo("interrupted: nothing kept (run with --checkpoint to keep finished batches)", err=True)

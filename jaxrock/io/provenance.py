@@ -1,6 +1,6 @@
 """How a result was made: a description of everything that determines its numbers (package
 version, model and every parameter, excitation kind, grid, integrator settings), written into
-checkpoints and result files, and compared before a checkpoint is reused.
+stores and result files, and compared before a store or a results file is resumed.
 
 A description is a flat dict of strings: ``{"jaxrock": "0.1.0", "model": "RigidModel",
 "model.block.height": "10.0", …}``. Array leaves of up to 8 numbers are written out; larger ones
@@ -111,59 +111,5 @@ def check_description(file: Path, wanted: dict[str, str], what: str, fresh: str)
     refuse_if_different(made, wanted, what, fresh)
 
 
-def _batch_files(path: Path) -> list[Path]:
-    # temporaries are named tmp_…, so they never match
-    return sorted(Path(path).glob("batch_*.npz"))
-
-
-def load_checkpoint(path: Path, wanted: dict[str, str], fields: tuple[str, ...]) -> list[tuple[slice, dict]]:
-    """The finished batches (cell slice, arrays) of a checkpoint folder made by the run `wanted`
-    describes. Refused, with one line that names the file, what differs and how to start afresh:
-    an unreadable description or batch, missing keys, or a checkpoint of other physics."""
-    path = Path(path)
-    fresh = f"delete {path} to start afresh (or run with --no-checkpoint, or another --out)"
-    check_description(path / "made_by.json", wanted, f"checkpoint {path}", fresh)
-    batches = []
-    for f in _batch_files(path):
-        try:
-            with np.load(f, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-        except Exception as e:  # a truncated or garbled batch
-            raise JaxrockInputError(f"checkpoint {f} is unreadable ({type(e).__name__}: {e}); {fresh}") from None
-        missing = [k for k in ("start", "stop", *fields) if k not in data]
-        if missing:
-            raise JaxrockInputError(f"checkpoint {f} lacks {', '.join(missing)}; {fresh}")
-        batches.append((slice(int(data["start"]), int(data["stop"])), data))
-    return batches
-
-
-def append_checkpoint(path: Path, made_by: dict[str, str], cells: slice, arrays: dict) -> None:
-    """Add one finished batch to a checkpoint folder (its own file, written to a temporary name
-    and renamed: an interruption never leaves a half-written batch, and nothing is rewritten)."""
-    path = Path(path)
-    path.mkdir(parents=True, exist_ok=True)
-    if not (path / "made_by.json").exists():
-        write_description(path / "made_by.json", made_by)
-    write_atomically(path / f"batch_{cells.start:012d}.npz", lambda tmp: np.savez(tmp, start=cells.start, stop=cells.stop, **arrays))
-
-
-def checkpoint_cells(path: Path) -> int:
-    """Cells kept in a checkpoint folder (0 if there is none or it is unreadable)."""
-    n = 0
-    for f in _batch_files(path):
-        try:
-            with np.load(f, allow_pickle=False) as z:
-                n += int(z["stop"]) - int(z["start"])
-        except Exception:
-            pass
-    return n
-
-
-def remove_temporaries(path: Path) -> None:
-    """Remove what an interrupted write left in a checkpoint folder (its finished batches stay)."""
-    for f in Path(path).glob("tmp_*"):
-        f.unlink(missing_ok=True)
-
-
-__all__ = ["append_checkpoint", "check_description", "checkpoint_cells", "command_line", "describe", "differences", "file_attrs", "load_checkpoint",
-           "package_version", "refuse_if_different", "remove_temporaries", "to_json", "value_text", "write_description"]
+__all__ = ["check_description", "command_line", "describe", "differences", "file_attrs", "package_version", "refuse_if_different",
+           "to_json", "value_text", "write_description"]

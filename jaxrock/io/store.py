@@ -100,8 +100,9 @@ def _made_by(path: Path) -> dict:
     try:
         group = zarr.open_group(path, mode="r")
         made = json.loads(group.attrs["made_by"])
-        if not isinstance(made, dict) or "chunk_done" not in group:
-            raise ValueError("not a jaxrock sweep store")
+        missing = [name for name in (*_variables(), "chunk_done") if name not in group or not (path / name / "zarr.json").is_file()]
+        if not isinstance(made, dict) or missing:
+            raise ValueError(f"no {', '.join(missing) or 'description'}")
     except Exception as e:  # missing metadata, garbled JSON, another kind of folder: one answer
         raise JaxrockInputError(f"store {path} is unreadable or not a jaxrock sweep ({type(e).__name__}: {e}); {_fresh(path)}") from None
     return made
@@ -134,11 +135,30 @@ def write_chunk(path, sweep, k: int, outputs: dict[str, np.ndarray]) -> None:
 
 
 def load(path):
-    """The store as an in-memory `xarray.Dataset`."""
+    """The store as an in-memory `xarray.Dataset`. A damaged chunk file, or a chunk flagged
+    finished whose scenes read as not run (a file removed), is refused in one line."""
     import xarray as xr
 
-    with xr.open_zarr(path, chunks=None) as ds:
-        return ds.load()
+    try:
+        with xr.open_zarr(path, chunks=None) as ds:
+            ds = ds.load()
+    except Exception as e:
+        raise JaxrockInputError(f"store {path} is unreadable ({type(e).__name__}: {e}); {_fresh(Path(path))}") from None
+    lost = int(((ds.status == NOT_RUN).sum()) if bool(ds.chunk_done.all()) else 0)
+    if lost:
+        raise JaxrockInputError(f"store {path} is unreadable (every chunk is flagged finished, but {lost} scenes read as not run: "
+                                f"a chunk file was removed?); {_fresh(Path(path))}")
+    return ds
+
+
+def kept_scenes(path) -> int:
+    """Scenes of the finished chunks in a store (0 when it is missing or unreadable)."""
+    import zarr
+
+    try:
+        return int((zarr.open_array(Path(path) / "status", mode="r")[...] != NOT_RUN).sum())
+    except Exception:
+        return 0
 
 
 def in_memory(sweep, chunks: dict[int, dict]):
@@ -157,4 +177,4 @@ def in_memory(sweep, chunks: dict[int, dict]):
     return xr.Dataset(data, coords=_coordinates(sweep), attrs=sweep.attrs())
 
 
-__all__ = ["NOT_RUN", "finished", "in_memory", "load", "open_for", "write_chunk"]
+__all__ = ["NOT_RUN", "finished", "in_memory", "kept_scenes", "load", "open_for", "write_chunk"]
