@@ -4,7 +4,7 @@ workers and chunk size, with the memory per scene.
     python benchmarks/bench_sweep.py [--quick]
 
 The scene set: a rigid-model pulse sweep (symmetric Ricker) over 2h ∈ {2, 5, 10, 20} m ×
-a_p/(g tanα) ∈ [0.5, 10] × ω_p/p ∈ [1, 15] (24 × 24 each: 2304 scenes), tanα = 0.2, a model per
+a_p/(g tanα) ∈ [0.5, 10] × ω_p/p ∈ [1, 15] (48 × 48 each: 9216 scenes), tanα = 0.2, a model per
 scene within a chunk (2h varies in it). Every row runs in its own process (forced host devices are
 set before JAX starts) with the compilation cache of this run: the first run compiles and warms
 it, the second is timed (warm), into a fresh store where a store is written.
@@ -95,9 +95,9 @@ def command(args: list[str], env_extra: dict, cwd: str) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="12 × 12 per size instead of 24 × 24 (a smoke run, not for the results file)")
+    ap.add_argument("--quick", action="store_true", help="12 × 12 per size instead of 48 × 48 (a smoke run, not for the results file)")
     opts = ap.parse_args()
-    n = 12 if opts.quick else 24
+    n = 12 if opts.quick else 48
     tmp = tempfile.mkdtemp(prefix="bench_sweep_")
     cache = {"JAXROCK_CACHE_DIR": os.path.join(tmp, "cache")}
     out(f"# bench_sweep: rigid pulse sweep, 4 sizes × {n} × {n} = {4 * n * n} scenes; {platform.processor() or platform.machine()}, "
@@ -118,7 +118,7 @@ def main() -> None:
     out(f"| 1 process, store | {one['chunks']} × {one['chunk']} | {rate1:,.0f} | 1.00 | {one['cold']:.1f} | {one['rss_mb']:.0f} | "
         f"{one['disk_per_scene']:.1f} |")
     for w in (1, 2):
-        r = child(cache, n=n, chunk=256, store=os.path.join(tmp, f"dask{w}"), workers=w)
+        r = child(cache, n=n, chunk=1024, store=os.path.join(tmp, f"dask{w}"), workers=w)
         rate = r["scenes"] / r["warm"]
         out(f"| Dask LocalCluster, {w} worker process(es), store | {r['chunks']} × {r['chunk']} | {rate:,.0f} | {rate / rate1:.2f} | "
             f"{r['cold']:.1f} | (client) {r['rss_mb']:.0f} | {r['disk_per_scene']:.1f} |")

@@ -291,7 +291,8 @@ def record_overturning_scale(
     """Least factor of `record` that overturns `model`'s body, for each height in `heights`.
 
     The body keeps the template's slenderness (and base slenderness); only its size changes.
-    The factor sweep `scales` is run vmapped for each height; the first overturning factor is then
+    The factor sweep `scales` is a sweep (`jaxrock.analyses.sweep`) of heights × factors, run
+    vmapped for each height; the first overturning factor is then
     refined by `refine` bisections against the largest smaller factor that does not overturn.
     Overturning is not monotone in the factor: an overturning window narrower than the sweep's
     step, below the first overturning factor found, is missed — refine the sweep to rule it out.
@@ -304,14 +305,13 @@ def record_overturning_scale(
     tan_a, tan_b = block.tan_alpha, block.b_base / block.h
     least = np.full(hs.size, np.inf)
     low = np.full(hs.size, np.nan)
-    for i, h in enumerate(tqdm(hs, desc="record spectrum", unit="height", disable=not progress)):
-        interrupt.stop_point()
-        new_block = type(block).from_slenderness(h, tan_a, tan_b, exact_inertia=block.exact_inertia)
-        m = eqx.tree_at(lambda x: x.block, model, new_block)
-        recs = jax.vmap(record.scaled)(jnp.asarray(sc))
-        over = np.asarray(run_batch(m, recs, integrator).overturned)
+    # the factor sweep: a sweep of the model resized to each height, one chunk (one vmapped batch) per height
+    sweep = Sweep.make(model, records=[record], height=hs, scale=sc, integrator=integrator, chunk_size=sc.size)
+    over_all = run_sweep(sweep, progress=progress).overturned.values[0]
+    for i, over in enumerate(tqdm(over_all, desc="bisection", unit="height", disable=not progress)):
         if not over.any():
             continue
+        m = sweep._resized(float(hs[i]))
         k = int(np.argmax(over))
         lo, hi = (0.0 if k == 0 else sc[k - 1]), sc[k]
         for _ in range(refine):

@@ -68,14 +68,15 @@ class Sweep:
         axis). Pulse sweeps take `accel_ratio` and `omega_ratio` (both required; `pulse` a pulse
         kind's name or class); record sweeps take `records` (a `jaxrock.Record` or a sequence of
         them) and `scale` (default 1). `model` is a model kind, or a model (a value: every scene
-        runs it, and no model quantity may vary). Every value is checked here, naming the
-        quantity and its valid range."""
+        runs it, resized to `height` if given, at its own slenderness; no other model quantity may
+        be given). Every value is checked here, naming the quantity and its valid range."""
         from ..model import AbstractModel
 
         if isinstance(model, AbstractModel):
-            varied = sorted(set(quantities) & set(MODEL_QUANTITIES)) + (["backbone"] if backbone is not None else [])
+            varied = sorted(set(quantities) & set(MODEL_QUANTITIES[1:])) + (["backbone"] if backbone is not None else [])
             if varied:
-                raise JaxrockInputError(f"{', '.join(varied)}: set by the model given; name a model kind to vary them")
+                raise JaxrockInputError(f"{', '.join(varied)}: set by the model given (of which only the height may vary); "
+                                        "name a model kind to vary them")
         elif model not in MODEL_KINDS:
             raise JaxrockInputError(f"model = {model!r}; valid: {', '.join(model_kinds())}")
         unknown = sorted(set(quantities) - set(QUANTITIES) - {"record"})
@@ -234,6 +235,14 @@ class Sweep:
         """The model of the sweep's first scene (unbatched)."""
         return self._models(self.chunk_values(0), batched=False)
 
+    def _resized(self, height):
+        """The model value at full height `height` and its own slenderness (and base's)."""
+        import equinox as eqx
+
+        block = self.model.block
+        new = type(block).from_slenderness(height, block.tan_alpha, block.b_base / block.h, exact_inertia=block.exact_inertia)
+        return eqx.tree_at(lambda m: m.block, self.model, new)
+
     def _models(self, v: dict, batched: bool):
         import jax
         import jax.numpy as jnp
@@ -242,7 +251,9 @@ class Sweep:
         from ..io.scenes_file import scene_model
 
         if not isinstance(self.model, str):
-            return self.model
+            if "height" not in v:
+                return self.model
+            return jax.vmap(self._resized)(jnp.asarray(v["height"])) if batched else self._resized(float(v["height"][0]))
         if not batched:
             block = Block.from_slenderness(float(v["height"][0]), float(v["tan_alpha"][0]),
                                            None if "tan_alpha_base" not in v else float(v["tan_alpha_base"][0]))
