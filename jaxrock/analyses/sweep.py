@@ -126,8 +126,19 @@ class Sweep:
         tb = axes.get("tan_alpha_base", fixed.get("tan_alpha_base"))
         if tb is not None and np.min(tb) < np.max(ta):
             raise JaxrockInputError(f"tan_alpha_base = {np.min(tb):g} < tan_alpha = {np.max(ta):g}; valid: every tan_alpha_base >= every tan_alpha")
-        return cls(model=model, axes=axes, fixed=fixed, pulse=pulse, records=recs, backbone=backbone, integrator=integrator,
-                   chunk_size=int(chunk_size))
+        sweep = cls(model=model, axes=axes, fixed=fixed, pulse=pulse, records=recs, backbone=backbone, integrator=integrator,
+                    chunk_size=int(chunk_size))
+        sweep._check_models()
+        return sweep
+
+    def _check_models(self) -> None:
+        """Refuse, in one line, a model quantity outside the model's own limits (`limits()`, e.g.
+        E ∈ [1e6, 1e15] Pa): the model of the first scene built with each axis's least and
+        greatest value (the limits are intervals)."""
+        first = {k: v[:1] for k, v in self.chunk_values(0).items()}
+        for name in (q for q in MODEL_QUANTITIES if q in self.axes):
+            for value in (np.min(self.axes[name]), np.max(self.axes[name])):
+                self._models({**first, name: np.asarray([value])}, batched=False)
 
     # -- the grid and its chunks ------------------------------------------------------------------
     @property
@@ -144,14 +155,23 @@ class Sweep:
 
     @property
     def chunk_shape(self) -> tuple[int, ...]:
-        """The chunk: the innermost axes whole while they fit `chunk_size`, the next one split, the
-        outer ones (and the record axis) one value at a time."""
-        out, room = [], self.chunk_size
-        for name, n in reversed(list(zip(self.dims, self.shape))):
-            take = 1 if name == "record" else max(1, min(n, room))
-            out.append(take)
-            room = room // n if take == n else 0
-        return tuple(reversed(out))
+        """The chunk: `t` values of one axis and every axis inside it whole, one value of the axes
+        outside (records one at a time), at most `chunk_size` scenes. Of these the one that
+        maximises cells²/2^⌈log₂ cells⌉ (the batch engine pads a batch to a power-of-two multiple
+        of its smallest size: 2016 cells run at 2048, 2304 at 4096)."""
+        shape, best, best_score = self.shape, (), -1.0
+        for j in range(len(shape)):
+            inner = math.prod(shape[j + 1 :])
+            if inner > self.chunk_size or (j < len(shape) - 1 and self.dims[j + 1] == "record"):
+                continue
+            most = 1 if self.dims[j] == "record" else min(shape[j], self.chunk_size // inner)
+            for t in range(1, most + 1):
+                cells = t * inner
+                score = cells * cells / (1 << (cells - 1).bit_length())
+                if score > best_score:
+                    best, best_score = (1,) * j + (t, *shape[j + 1 :]), score
+        return best
+
 
     @property
     def chunk_grid(self) -> tuple[int, ...]:
