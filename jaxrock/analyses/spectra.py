@@ -311,7 +311,7 @@ def record_overturning_scale(
     for i, over in enumerate(tqdm(over_all, desc="bisection", unit="height", disable=not progress)):
         if not over.any():
             continue
-        m = sweep._resized(float(hs[i]))
+        m = sweep.resized(float(hs[i]))
         k = int(np.argmax(over))
         lo, hi = (0.0 if k == 0 else sc[k - 1]), sc[k]
         for _ in range(refine):

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import math
 import time
 from typing import Callable, Iterable
@@ -59,11 +60,11 @@ class Sweep:
     records: tuple = ()
     backbone: str | None = None
     integrator: object = None
-    chunk_size: int = 4096
+    chunk_size: int = 1024
 
     @classmethod
     def make(cls, model="rigid", *, pulse=None, records=None, backbone: str | None = None,
-             integrator=None, chunk_size: int = 4096, **quantities) -> "Sweep":
+             integrator=None, chunk_size: int = 1024, **quantities) -> "Sweep":
         """A checked sweep: each keyword of `QUANTITIES` is one number (fixed) or a sequence (an
         axis). Pulse sweeps take `accel_ratio` and `omega_ratio` (both required; `pulse` a pulse
         kind's name or class); record sweeps take `records` (a `jaxrock.Record` or a sequence of
@@ -232,6 +233,16 @@ class Sweep:
             "made_by": provenance.to_json(self.description()),
         }
 
+    @functools.cached_property
+    def batch_limit(self) -> int:
+        """Scenes per vmapped batch whose running state fits the batch engine's memory budget
+        (`engine.batch_limit`): a chunk larger than it runs in several batches."""
+        import equinox as eqx
+
+        model = self.template_model()
+        integ = model.default_integrator() if self.integrator is None else self.integrator
+        return batch_limit(eqx.filter_eval_shape(make_stepper, model, integ, False))
+
     @property
     def kind(self) -> str:
         """The model kind's name, or the class name of a model given as a value."""
@@ -255,7 +266,7 @@ class Sweep:
         """The model of the sweep's first scene (unbatched)."""
         return self._models(self.chunk_values(0), batched=False)
 
-    def _resized(self, height):
+    def resized(self, height):
         """The model value at full height `height` and its own slenderness (and base's)."""
         import equinox as eqx
 
@@ -273,17 +284,15 @@ class Sweep:
         if not isinstance(self.model, str):
             if "height" not in v:
                 return self.model
-            return jax.vmap(self._resized)(jnp.asarray(v["height"])) if batched else self._resized(float(v["height"][0]))
+            return jax.vmap(self.resized)(jnp.asarray(v["height"])) if batched else self.resized(float(v["height"][0]))
         if not batched:
             block = Block.from_slenderness(float(v["height"][0]), float(v["tan_alpha"][0]),
                                            None if "tan_alpha_base" not in v else float(v["tan_alpha_base"][0]))
             return scene_model(self.model, block, **self._model_kwargs(v, 0))
-        n = len(v["height"])
         tb = v.get("tan_alpha_base", v["tan_alpha"])
         block = jax.vmap(Block.from_slenderness)(jnp.asarray(v["height"]), jnp.asarray(v["tan_alpha"]), jnp.asarray(tb))
         kw = {k: jnp.asarray(x) for k, x in self._model_kwargs(v).items() if k != "backbone"}
         backbone = {} if self.backbone is None else {"backbone": self.backbone}
-        assert all(x.shape == (n,) for x in kw.values())
         return jax.vmap(lambda b, kw: scene_model(self.model, b, **kw, **backbone))(block, kw)
 
     def _excitations(self, v: dict, model, batched: bool):
@@ -316,9 +325,7 @@ def run_chunk(sweep: Sweep, k: int, devices=None) -> dict[str, np.ndarray]:
     batched = any(np.unique(v[q]).size > 1 for q in MODEL_QUANTITIES if q in v)
     model = sweep._models(v, batched)
     exc = sweep._excitations(v, model, batched)
-    n = sweep.chunk_scenes(k)
-    integ = model.default_integrator() if sweep.integrator is None else sweep.integrator
-    limit = batch_limit(make_stepper(model, integ, batched)) if n > 64 else n  # the running state's memory bound
+    n, limit = sweep.chunk_scenes(k), sweep.batch_limit
     take = lambda tree, sl: jax.tree_util.tree_map(lambda x: x[sl], tree)
     parts = []
     for lo in range(0, n, limit):

@@ -317,7 +317,7 @@ def sweep(
     tol: Optional[float] = typer.Option(None, help="spring models: generalized-α at this local tolerance (default: the model's default integrator)"),
     store: Path = typer.Option(Path("out/sweep.zarr"), help="the Zarr store (xarray.open_zarr reads it); a rerun of the same "
                                "command resumes it, one with other parameters is refused"),
-    chunk_size: int = typer.Option(4096, help="most scenes per chunk: one vmapped batch, one Zarr chunk, one Dask task"),
+    chunk_size: int = typer.Option(1024, help="most scenes per chunk: one vmapped batch, one Zarr chunk, one Dask task (1024: the fastest of 256, 1024, 4096 on the rigid model, benchmarks/bench_sweep.py)"),
     devices: Optional[int] = typer.Option(None, help="shard each chunk over this many local devices (default: all)"),
     scheduler: Optional[str] = typer.Option(None, help="address of a running Dask scheduler (tcp://host:8786): each chunk is a "
                                             "task of its workers, which write into --store (a folder they all see); needs "
