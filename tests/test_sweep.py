@@ -171,16 +171,21 @@ def test_sharded_over_four_host_devices_is_bit_identical():
 
 
 def test_dask_cluster_writes_the_same_store_even_when_a_worker_is_killed(tmp_path):
-    """A `LocalCluster` of two worker processes on 127.0.0.1 writes the store one process writes,
-    bit for bit; a worker killed by SIGKILL while chunks are in flight has its chunks run again."""
+    """A `LocalCluster` of two worker processes on 127.0.0.1, joined by `jaxrock sweep --scheduler`,
+    writes the store one process writes, bit for bit; a worker killed by SIGKILL while chunks are
+    in flight has its chunks run again."""
     distributed = pytest.importorskip("distributed")
     sw = Sweep.make("rigid", height=[3.0, 9.0], accel_ratio=np.linspace(0.8, 8, 4), omega_ratio=np.linspace(1, 12, 4), chunk_size=4)
     assert sw.n_chunks == 8
     here = run_sweep(sw, tmp_path / "here.zarr", progress=False)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        there = run_sweep(sw, tmp_path / "cluster.zarr", client=client, progress=False)
+        r = invoke("sweep", "--height", "3,9", "--accel-ratio", "0.8:8:4", "--omega-ratio", "1:12:4", "--chunk-size", "4", "-q",
+                   "--store", str(tmp_path / "cluster.zarr"), "--scheduler", cluster.scheduler_address)
+        assert r.exit_code == 0 and f"on Dask cluster {cluster.scheduler_address}" in r.output, r.output
+        there = xr.open_zarr(tmp_path / "cluster.zarr", chunks=None)
         _same(here, there)
+        assert there.attrs["made_by"] == here.attrs["made_by"]
         pids = list(client.run(os.getpid).values())
         assert len(set(pids)) == 2 and os.getpid() not in pids
         seen = []

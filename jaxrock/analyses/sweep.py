@@ -22,6 +22,7 @@ import contextlib
 import dataclasses
 import functools
 import math
+import os
 import time
 from typing import Callable, Iterable
 
@@ -399,7 +400,7 @@ def _run(sweep, store, client, devices, progress, on_chunk):
                 if on_chunk is not None:
                     on_chunk(k)
         else:
-            _run_on_cluster(client, str(store), sweep, todo, bar, on_chunk)
+            _run_on_cluster(client, os.path.abspath(store), sweep, todo, bar, on_chunk)  # workers may start elsewhere
     finally:
         bar.close()
     if store is None:
