@@ -24,6 +24,7 @@ import functools
 import math
 import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from typing import Callable, Iterable
 
 import numpy as np
@@ -387,18 +388,30 @@ def _run(sweep, store, client, devices, progress, on_chunk):
     held = {}
     bar = tqdm(total=sweep.size, initial=sweep.size - sum(sweep.chunk_scenes(k) for k in todo), unit="scene", desc="sweep",
                disable=not progress, smoothing=0.1)
+    def finished_chunk(k):
+        bar.update(sweep.chunk_scenes(k))
+        if on_chunk is not None:
+            on_chunk(k)
+
     try:
         if client is None:
-            for k in todo:
-                interrupt.stop_point()
-                out = run_chunk(sweep, k, devices)
-                if store is None:
-                    held[k] = out
-                else:
-                    zstore.write_chunk(store, sweep, k, out)
-                bar.update(sweep.chunk_scenes(k))
-                if on_chunk is not None:
-                    on_chunk(k)
+            # a chunk is written by a second thread while the next one runs; leaving the block (an
+            # interruption, an error) waits for the write in progress, so a finished chunk is kept
+            with ThreadPoolExecutor(max_workers=1) as writer:
+                pending = None
+                for k in todo:
+                    interrupt.stop_point()
+                    out = run_chunk(sweep, k, devices)
+                    if pending is not None:
+                        finished_chunk(pending.result())
+                        pending = None
+                    if store is None:
+                        held[k] = out
+                        finished_chunk(k)
+                    else:
+                        pending = writer.submit(lambda k, out: zstore.write_chunk(store, sweep, k, out) or k, k, out)
+                if pending is not None:
+                    finished_chunk(pending.result())
         else:
             _run_on_cluster(client, os.path.abspath(store), sweep, todo, bar, on_chunk)  # workers may start elsewhere
     finally:
