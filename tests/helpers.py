@@ -75,4 +75,7 @@ class Watch:
     def finish(self, timeout: float = 240.0):
         rc = self.proc.wait(timeout)
         self._t.join(5)
-        return rc, self.proc.stdout.read(), self.text
+        out = self.proc.stdout.read()
+        self.proc.stdout.close()
+        self.proc.stderr.close()
+        return rc, out, self.text

@@ -5,7 +5,9 @@ running are gathered into a smaller batch between passes, so that a few long cel
 near the uplift line, rocking near the overturning line) do not make the whole batch wait; with
 `Schedule.lanes` (the spring model's dearer steps) a pass holds at most that many cells and a
 finished cell's place goes to the next one. Else it is one vmapped solve. Every scene is guarded as `simulate` guards it. Used by the spectra, the
-scenes files and any sweep.
+scenes files and any sweep. With several local devices each pass is sharded over them
+(`kernels.advance`: a `NamedSharding` of the cells over a 1-D mesh, each device running the
+one-device kernel on its block), with the same bits as one device.
 
 Three calls, three sizes: `simulate` runs one scene; `run_batch` a batch in memory (one model for
 every excitation, or one per scene with `model_batched`); `run_scenes`

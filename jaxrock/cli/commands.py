@@ -381,13 +381,15 @@ def sweep(
         except ImportError:
             raise JaxrockInputError("--scheduler needs Dask's distributed: pip install 'jaxrock[distributed]'") from None
         try:
-            client = guards._held.enter_context(Client(scheduler, timeout="20s"))
-        except OSError as e:
-            raise JaxrockInputError(f"--scheduler {scheduler}: no Dask scheduler answers ({e})") from None
+            client = guards._held.enter_context(Client(scheduler, timeout="10s", set_as_default=False))  # dask.compute elsewhere stays local
+        except Exception as e:  # refused, timed out, or not an address: one answer
+            raise JaxrockInputError(f"--scheduler {scheduler}: no Dask scheduler answers there within 10 s "
+                                    f"({type(e).__name__}: {e}); expected a running scheduler's address, tcp://HOST:PORT") from None
     from ..analyses.sweep import run_sweep
     from ..interrupt import Interrupted
     from ..io import store as zstore
 
+    before = zstore.kept_scenes(store) if store.is_dir() else 0  # a resumed run: what the store held
     t0 = time.perf_counter()
     try:
         ds = run_sweep(sw, store, client=client, devices=None if devices is None else _local_devices(devices), progress=not quiet,
@@ -399,8 +401,10 @@ def sweep(
     seconds = time.perf_counter() - t0
     dims = " × ".join(f"{len(v)} {k}" for k, v in sw.axes.items())
     where = f"Dask cluster {scheduler}" if scheduler else f"{len(_local_devices(devices))} device(s)"
+    ran = sw.size - before
+    resumed = f" ({before:,} were in the store already)" if before else ""
     typer.echo(f"sweep: {sw.model} model, {dims} = {sw.size:,} scenes in {sw.n_chunks} chunk(s) of ≤ {math.prod(sw.chunk_shape):,}; "
-               f"{seconds:.1f} s ({sw.size / seconds:,.0f} scenes/s with compilation) on {where}")
+               f"{ran:,} run in {seconds:.1f} s ({ran / seconds:,.0f} scenes/s with compilation) on {where}{resumed}")
     typer.echo(f"overturned: {int(ds.overturned.sum()):,} scenes ({100 * float(ds.overturned.mean()):.1f} %); uplifted: "
                f"{int(ds.uplifted.sum()):,}")
     typer.echo(f"wrote {store}")
