@@ -185,7 +185,7 @@ def test_dask_cluster_writes_the_same_store_even_when_a_worker_is_killed(tmp_pat
     assert sw.n_chunks == 8
     here = run_sweep(sw, tmp_path / "here.zarr", progress=False)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+            distributed.Client(cluster, set_as_default=False) as client:
         r = invoke("sweep", "--height", "3,9", "--accel-ratio", "0.8:8:4", "--omega-ratio", "1:12:4", "--chunk-size", "4", "-q",
                    "--store", str(tmp_path / "cluster.zarr"), "--scheduler", cluster.scheduler_address)
         assert r.exit_code == 0 and f"on Dask cluster {cluster.scheduler_address}" in r.output, r.output

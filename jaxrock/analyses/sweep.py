@@ -431,7 +431,7 @@ def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], bar, o
         f"jaxrock-chunk-{k}-{time.time_ns()}" for k in todo])
     by_key = {f.key: k for f, k in zip(futures, todo)}
     try:
-        for f in as_completed(futures):
+        for f in as_completed(futures, loop=client.loop):
             f.result()  # a task's error is raised here
             bar.update(sweep.chunk_scenes(by_key[f.key]))
             if on_chunk is not None:
