@@ -201,8 +201,7 @@ def overturning_spectrum(
         **provenance.file_attrs(model, integrator),
         "made_by": ds.attrs["made_by"],
     }
-    spec = Spectrum(omega_ratio=wr, accel_ratio=ar, **{k: ds[k].values.astype(OUTPUTS[k].dtype if k in OUTPUTS else np.int32)
-                                                      for k in (*OUTPUTS, "status")}, attrs=attrs)
+    spec = Spectrum(omega_ratio=wr, accel_ratio=ar, **{k: ds[k].values for k in (*OUTPUTS, "status")}, attrs=attrs)
     if int(refine) > 0:
         spec = refine_boundaries(model, spec, pulse=pulse, iterations=int(refine), integrator=integrator)
     if ck is not None and ck.exists() and not keep_checkpoint:

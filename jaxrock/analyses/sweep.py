@@ -38,7 +38,6 @@ QUANTITIES = SWEEP_QUANTITIES
 AXIS_ORDER = tuple(QUANTITIES)  # a store's dimensions, outermost first
 MODEL_QUANTITIES = ("height", "tan_alpha", "tan_alpha_base", "eta", "cbar", "E", "rho", "zeta", "smoothing")
 PULSE_QUANTITIES = ("accel_ratio", "omega_ratio")
-RECORD_QUANTITIES = ("record", "scale")
 DEFAULTS = {"height": 10.0, "tan_alpha": 0.2}  # the rest: the model kind's own defaults
 
 
@@ -175,7 +174,6 @@ class Sweep:
                     best, best_score = (1,) * j + (t, *shape[j + 1 :]), score
         return best
 
-
     @property
     def chunk_grid(self) -> tuple[int, ...]:
         return tuple(-(-n // c) for n, c in zip(self.shape, self.chunk_shape))
@@ -209,7 +207,7 @@ class Sweep:
         (`jaxrock.io.provenance`): a store made by another description is refused."""
         from ..io import provenance
 
-        d = provenance.describe(model=self.template_model(), excitation=self.excitation, integrator=self.integrator,
+        d = provenance.describe(model=self.template_model, excitation=self.excitation, integrator=self.integrator,
                                 grid={k: v for k, v in self.axes.items() if k != "record"})
         d.update({"model kind": self.kind, "backbone": str(self.backbone), "chunk_shape": str(self.chunk_shape)})
         if "record" in self.axes:
@@ -224,7 +222,7 @@ class Sweep:
         versions) and complete (`made_by`, the `description` as JSON)."""
         from ..io import provenance
 
-        model = self.template_model()
+        model = self.template_model
         return {
             "title": f"jaxrock sweep: {self.kind} model, {self.excitation}",
             **provenance.file_attrs(model, self.integrator),
@@ -241,7 +239,7 @@ class Sweep:
         (`engine.batch_limit`): a chunk larger than it runs in several batches."""
         import equinox as eqx
 
-        model = self.template_model()
+        model = self.template_model
         integ = model.default_integrator() if self.integrator is None else self.integrator
         return batch_limit(eqx.filter_eval_shape(make_stepper, model, integ, False))
 
@@ -264,8 +262,9 @@ class Sweep:
             kw["backbone"] = self.backbone
         return kw
 
+    @functools.cached_property
     def template_model(self):
-        """The model of the sweep's first scene (unbatched)."""
+        """The model of the sweep's first scene (unbatched; built once)."""
         return self._models(self.chunk_values(0), batched=False)
 
     def resized(self, height):
@@ -388,6 +387,7 @@ def _run(sweep, store, client, devices, progress, on_chunk):
     held = {}
     bar = tqdm(total=sweep.size, initial=sweep.size - sum(sweep.chunk_scenes(k) for k in todo), unit="scene", desc="sweep",
                disable=not progress, smoothing=0.1)
+
     def finished_chunk(k):
         bar.update(sweep.chunk_scenes(k))
         if on_chunk is not None:
@@ -413,7 +413,7 @@ def _run(sweep, store, client, devices, progress, on_chunk):
                 if pending is not None:
                     finished_chunk(pending.result())
         else:
-            _run_on_cluster(client, os.path.abspath(store), sweep, todo, bar, on_chunk)  # workers may start elsewhere
+            _run_on_cluster(client, os.path.abspath(store), sweep, todo, finished_chunk)  # workers may start elsewhere
     finally:
         bar.close()
     if store is None:
@@ -421,8 +421,9 @@ def _run(sweep, store, client, devices, progress, on_chunk):
     return zstore.load(store)
 
 
-def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], bar, on_chunk) -> None:
-    """Every chunk of `todo` as a Dask task (pure: a task run twice writes the same bytes)."""
+def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], finished_chunk: Callable[[int], None]) -> None:
+    """Every chunk of `todo` as a Dask task (a task run twice writes the same bytes, so a lost
+    worker's chunk run again elsewhere is harmless); `finished_chunk(k)` as each one ends."""
     from distributed import as_completed
 
     from .. import interrupt
@@ -433,9 +434,7 @@ def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], bar, o
     try:
         for f in as_completed(futures, loop=client.loop):
             f.result()  # a task's error is raised here
-            bar.update(sweep.chunk_scenes(by_key[f.key]))
-            if on_chunk is not None:
-                on_chunk(by_key[f.key])
+            finished_chunk(by_key[f.key])
             interrupt.stop_point()
     finally:
         client.cancel(futures)

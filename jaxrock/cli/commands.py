@@ -361,6 +361,7 @@ def sweep(
         recs = read_records([r for r in records.split(",") if r.strip()], units=units)
     if scheduler is not None and devices is not None:
         raise JaxrockInputError("--devices applies to this process; with --scheduler each worker uses its own devices")
+    devs = None if scheduler is not None else _local_devices(devices)
     if store.exists() and not store.is_dir():
         raise JaxrockInputError(f"--store {store}: is a file; expected a Zarr store folder (new or made by this sweep)")
     check_writable("--store", store.with_name(store.name + ".lock"))
@@ -392,7 +393,7 @@ def sweep(
     before = zstore.kept_scenes(store) if store.is_dir() else 0  # a resumed run: what the store held
     t0 = time.perf_counter()
     try:
-        ds = run_sweep(sw, store, client=client, devices=None if devices is None else _local_devices(devices), progress=not quiet,
+        ds = run_sweep(sw, store, client=client, devices=devs, progress=not quiet,
                        history=_history())
     except Interrupted:
         kept = len(zstore.finished(store, sw)) if store.exists() else 0
@@ -400,7 +401,7 @@ def sweep(
         raise typer.Exit(EXIT_INTERRUPTED) from None
     seconds = time.perf_counter() - t0
     dims = " × ".join(f"{len(v)} {k}" for k, v in sw.axes.items())
-    where = f"Dask cluster {scheduler}" if scheduler else f"{len(_local_devices(devices))} device(s)"
+    where = f"Dask cluster {scheduler}" if scheduler else f"{len(devs)} device(s)"
     ran = sw.size - before
     resumed = f" ({before:,} were in the store already)" if before else ""
     typer.echo(f"sweep: {sw.model} model, {dims} = {sw.size:,} scenes in {sw.n_chunks} chunk(s) of ≤ {math.prod(sw.chunk_shape):,}; "

@@ -97,7 +97,7 @@ def _resume_command(extra: str | None = None) -> str:
 
 
 def _interrupted(ck: Optional[Path], n_cells: int):
-    """A stop asked by a signal: remove half-written files, say what is kept and how to resume; exit 130."""
+    """A stop asked by a signal: say what the checkpoint store keeps and how to resume; exit 130."""
     from ..io.store import kept_scenes
 
     if ck is not None and ck.is_dir():
