@@ -41,6 +41,7 @@ _EXPORTS = {
                      "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
     **dict.fromkeys(["el_centro", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",
+    **dict.fromkeys(["record_measures", "suite_measures"], "intensity"),
     **dict.fromkeys(["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
                      "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
                      "rm_target", "Sweep", "run_sweep"], "analyses"),
