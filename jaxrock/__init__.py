@@ -42,9 +42,10 @@ _EXPORTS = {
     **dict.fromkeys(["el_centro", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",
     **dict.fromkeys(["record_measures", "suite_measures"], "intensity"),
+    "fit_lognormal": "analyses.fragility",
     **dict.fromkeys(["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
                      "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
-                     "rm_target", "Sweep", "run_sweep"], "analyses"),
+                     "rm_target", "Sweep", "run_sweep", "least_overturning_scale"], "analyses"),
     "calibration_report": "reports",  # writes figures: matplotlib is imported with it
 }
 __all__ = list(_EXPORTS)

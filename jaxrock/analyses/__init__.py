@@ -7,15 +7,19 @@
 - `calibration`: the damper c̄ calibrated by gradient against the rigid model's energy loss (eq. 17);
 - `scenes`: a scenes file run row by row, vmapped by structure (`run_scenes`);
 - `sweep`: every scene of a product of axes, chunk by chunk into a Zarr store, on local devices or a
-  Dask cluster (`Sweep`, `run_sweep`).
+  Dask cluster (`Sweep`, `run_sweep`);
+- `suite`: the least overturning scale of every record of a suite for every column, by vmapped
+  bisection (`least_overturning_scale`).
 """
 
 from .calibration import CalibrationResult, calibrate_cbar, fit_power_law
 from .free_rocking import energy_ratio, energy_ratio_grid, rm_target
 from .engine import run_batch
 from .scenes import run_scenes
+from .suite import least_overturning_scale
 from .sweep import Sweep, run_sweep
 from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, refine_boundaries
 
 __all__ = ["run_batch", "Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries",
-           "run_scenes", "CalibrationResult", "calibrate_cbar", "energy_ratio", "energy_ratio_grid", "fit_power_law", "rm_target", "Sweep", "run_sweep"]
+           "run_scenes", "CalibrationResult", "calibrate_cbar", "energy_ratio", "energy_ratio_grid", "fit_power_law", "rm_target", "Sweep", "run_sweep",
+           "least_overturning_scale"]

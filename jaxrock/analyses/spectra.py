@@ -17,7 +17,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from tqdm.auto import tqdm
 
 from .. import interrupt
 from .._validate import JaxrockInputError, check_grid
@@ -29,6 +28,7 @@ from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module
 from ..geometry import pulse_of_ratios
 from ..scene import AXES, DEFAULT_PULSE, pulse_class
 from .engine import batch_limit, even_batches, make_stepper, run_batch
+from .suite import least_overturning_scale
 from .sweep import Sweep, run_sweep
 
 
@@ -290,9 +290,9 @@ def record_overturning_scale(
     """Least factor of `record` that overturns `model`'s body, for each height in `heights`.
 
     The body keeps the template's slenderness (and base slenderness); only its size changes.
-    The factor sweep `scales` is a sweep (`jaxrock.analyses.sweep`) of heights × factors, run
-    vmapped for each height; the first overturning factor is then
-    refined by `refine` bisections against the largest smaller factor that does not overturn.
+    A suite of one record (`jaxrock.analyses.suite.least_overturning_scale`): the factor sweep
+    `scales` run vmapped for each height, the first overturning factor then refined by `refine`
+    bisections (all heights in one vmapped batch) against the factor before it.
     Overturning is not monotone in the factor: an overturning window narrower than the sweep's
     step, below the first overturning factor found, is missed — refine the sweep to rule it out.
     """
@@ -302,26 +302,10 @@ def record_overturning_scale(
         raise JaxrockInputError(f"record must be a jaxrock.Record, got {type(record).__name__}")
     block = model.block
     tan_a, tan_b = block.tan_alpha, block.b_base / block.h
-    least = np.full(hs.size, np.inf)
-    low = np.full(hs.size, np.nan)
-    # the factor sweep: a sweep of the model resized to each height, one chunk (one vmapped batch) per height
+    # a suite of one record: the model resized to each height, one chunk (one vmapped batch) per height
     sweep = Sweep.make(model, records=[record], height=hs, scale=sc, integrator=integrator, chunk_size=sc.size)
-    over_all = run_sweep(sweep, progress=progress).overturned.values[0]
-    for i, over in enumerate(tqdm(over_all, desc="bisection", unit="height", disable=not progress)):
-        if not over.any():
-            continue
-        m = sweep.resized(float(hs[i]))
-        k = int(np.argmax(over))
-        lo, hi = (0.0 if k == 0 else sc[k - 1]), sc[k]
-        for _ in range(refine):
-            interrupt.stop_point()
-            mid = 0.5 * (lo + hi)
-            sol = run_batch(m, jax.vmap(record.scaled)(jnp.asarray([mid])), integrator)
-            if bool(np.asarray(sol.overturned)[0]):
-                hi = mid
-            else:
-                lo = mid
-        least[i], low[i] = hi, lo
+    ds = least_overturning_scale(sweep, refine=refine, progress=progress)
+    least, low = ds.least_scale.values[0], ds.bracket_low.values[0]
     attrs = {"model": type(model).__name__, "record": record.name, "tan_alpha": float(tan_a), "tan_alpha_base": float(tan_b),
              **provenance.file_attrs(model, integrator)}
     return RecordSpectrum(height=hs, scale=least, bracket_low=low, attrs=attrs)

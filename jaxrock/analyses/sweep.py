@@ -193,11 +193,17 @@ class Sweep:
     def chunk_values(self, k: int) -> dict[str, np.ndarray]:
         """Per scene of chunk `k` (C order of its region): the value of every quantity the sweep
         sets (axes and fixed); `record` as an index into `records`."""
-        region = self.chunk_region(k)
+        return self.values_at(self.chunk_region(k))
+
+    def values_at(self, region: tuple[slice, ...], dims: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+        """Per scene of the grid region `region` of the axes `dims` (default: all; C order): the
+        value of every quantity the sweep sets (axes and fixed; the axes not in `dims` left out);
+        `record` as an index into `records`."""
+        dims = self.dims if dims is None else dims
         grids = np.meshgrid(*(np.arange(s.start, s.stop) for s in region), indexing="ij")
-        n = self.chunk_scenes(k)
+        n = math.prod(s.stop - s.start for s in region)
         out = {name: np.full(n, v) for name, v in self.fixed.items()}
-        for name, idx in zip(self.dims, grids):
+        for name, idx in zip(dims, grids):
             out[name] = idx.ravel() if name == "record" else self.axes[name][idx.ravel()]
         return out
 
@@ -315,18 +321,25 @@ class Sweep:
 
 
 def run_chunk(sweep: Sweep, k: int, devices=None) -> dict[str, np.ndarray]:
-    """The summary outputs (and `status`) of chunk `k`, each an array of the chunk's region. One
-    model for the whole chunk when no model quantity varies within it (a spectrum's grid), else
-    one per scene. `devices`: the devices its scenes are sharded over (None: every local one)."""
+    """The summary outputs (and `status`) of chunk `k`, each an array of the chunk's region
+    (`run_values`). `devices`: the devices its scenes are sharded over (None: every local one)."""
+    shape = tuple(s.stop - s.start for s in sweep.chunk_region(k))
+    return {name: a.reshape(shape) for name, a in run_values(sweep, sweep.chunk_values(k), devices).items()}
+
+
+def run_values(sweep: Sweep, v: dict[str, np.ndarray], devices=None) -> dict[str, np.ndarray]:
+    """The summary outputs (and `status`, int32) of the scenes `v` (quantity → one value per scene,
+    as `Sweep.values_at` gives them; of one record), one array each. One model for all scenes
+    when no model quantity varies among them (a spectrum's grid), else one per scene; run in
+    batches of at most `sweep.batch_limit` scenes, sharded over `devices` (None: every local one)."""
     import jax
 
     from ..results import status_codes
 
-    v = sweep.chunk_values(k)
     batched = any(np.unique(v[q]).size > 1 for q in MODEL_QUANTITIES if q in v)
     model = sweep._models(v, batched)
     exc = sweep._excitations(v, model, batched)
-    n, limit = sweep.chunk_scenes(k), sweep.batch_limit
+    n, limit = len(next(iter(v.values()))), sweep.batch_limit
     take = lambda tree, sl: jax.tree_util.tree_map(lambda x: x[sl], tree)
     parts = []
     for lo in range(0, n, limit):
@@ -334,8 +347,7 @@ def run_chunk(sweep: Sweep, k: int, devices=None) -> dict[str, np.ndarray]:
         m = take(model, sl) if batched else model
         sol = run_batch(m, take(exc, sl), sweep.integrator, model_batched=batched, devices=devices)
         parts.append({name: np.asarray(getattr(sol, name)) for name in OUTPUTS} | {"status": np.asarray(status_codes(sol.status))})
-    shape = tuple(s.stop - s.start for s in sweep.chunk_region(k))
-    out = {name: np.concatenate([p[name] for p in parts]).reshape(shape) for name in parts[0]}
+    out = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
     out["status"] = out["status"].astype(np.int32)
     return out
 
@@ -440,4 +452,4 @@ def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], finish
         client.cancel(futures)
 
 
-__all__ = ["Sweep", "run_chunk", "run_sweep", "QUANTITIES", "AXIS_ORDER"]
+__all__ = ["Sweep", "run_chunk", "run_sweep", "run_values", "QUANTITIES", "AXIS_ORDER"]
