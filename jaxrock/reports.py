@@ -12,7 +12,9 @@ from pathlib import Path
 import numpy as np
 
 from .analyses.calibration import CALIBRATION_ANGLES, CalibrationResult, PowerLawFit, calibrate_cbar, fit_power_law, rm_targets, warm_up
+from .analyses.fragility import BETA_MIN
 from .analyses.free_rocking import FIG7_CBARS, FIG7_TAN_ALPHAS, SpringFamily, energy_ratio_grid
+from .io.files import write_atomically
 from .io.tables import write_table
 from .plotting import plot_calibration, plot_energy_ratio, plot_record_spectrum, plot_spectrum
 
@@ -141,4 +143,60 @@ def record_spectrum_files(rs, out: Path, label: str, title: str) -> tuple[Path, 
     return nc, csv_path, png
 
 
-__all__ = ["CalibrationReport", "calibration_report", "spectrum_files", "record_spectrum_files"]
+def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
+    """Write a record suite (`jaxrock.analyses.suite.run_suite`) into the folder `out`: the dataset
+    `suite.zarr` (xarray.open_zarr), `least_scale.csv`, the fragility table `fragility.csv` and
+    `fragility.md`, and the figures `least_scale.png` and `fragility.png`."""
+    import shutil
+    import warnings
+
+    from .plotting import plot_fragility, plot_suite_scales
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    files = {}
+    z = out / "suite.zarr"
+    tmp = out / "tmp_suite.zarr"
+    shutil.rmtree(tmp, ignore_errors=True)
+    with warnings.catch_warnings():  # consolidated metadata is "not part of the format 3 specification": xarray reads it, and warns without it
+        warnings.simplefilter("ignore")
+        ds.to_zarr(tmp, mode="w", zarr_format=3, consolidated=True)
+    shutil.rmtree(z, ignore_errors=True)
+    tmp.rename(z)
+    files["dataset"] = z
+    cells = [d for d in ds.least_scale.dims if d not in ("model", "record")]
+    rows = []
+    for idx in np.ndindex(*(ds.sizes[d] for d in ("model", "record", *cells))):
+        sel = dict(zip(("model", "record", *cells), idx))
+        one = ds.isel(sel)
+        rows.append({"model": str(one.model.values), "record": str(one.record.values), **{d: float(one[d]) for d in cells},
+                     "least_scale": float(one.least_scale), "bracket_low": float(one.bracket_low),
+                     "bracket_width": float(one.bracket_width), "windows": int(one.windows), "worst_status": int(one.worst_status)})
+    files["least_scale"] = write_table(out / "least_scale.csv", rows)
+    units = ds.fragility_median.attrs.get("units", "")
+    im = ds.attrs.get("im", "")
+    rows, md = [], [f"| model | {' | '.join(cells)} | median {im} [{units}] | 5–95 % | β | 5–95 % | overturned / runs | failed |",
+                    "|---|" + "---|" * len(cells) + "---|---|---|---|---|---|"]
+    for idx in np.ndindex(*(ds.sizes[d] for d in ("model", *cells))):
+        one = ds.isel(dict(zip(("model", *cells), idx)))
+        m, b = float(one.fragility_median), float(one.fragility_beta)
+        (m_lo, m_hi), (b_lo, b_hi) = one.fragility_median_ci.values, one.fragility_beta_ci.values
+        vals = {d: float(one[d]) for d in cells}
+        rows.append({"model": str(one.model.values), **vals, "im": im, "median": m, "median_5": float(m_lo), "median_95": float(m_hi),
+                     "beta": b, "beta_5": float(b_lo), "beta_95": float(b_hi), "n": int(one.fragility_n),
+                     "n_overturned": int(one.fragility_n_overturned), "n_failed": int(one.fragility_n_failed)})
+        md.append(f"| {one.model.values} | " + " | ".join(f"{v:g}" for v in vals.values()) + f" | {m:.4g} | {m_lo:.4g}–{m_hi:.4g} | "
+                  f"{b:.3f} | {b_lo:.3f}–{b_hi:.3f} | {int(one.fragility_n_overturned)} / {int(one.fragility_n)} | {int(one.fragility_n_failed)} |")
+    files["fragility"] = write_table(out / "fragility.csv", rows)
+    note = (f"Lognormal fragility P = Φ(ln(x/θ)/β) by maximum likelihood of every record × factor outcome of the sweep "
+            f"(Baker 2015, multiple stripes), x = {im}; intervals: bootstrap over records ({ds.fragility_median_boot.sizes['bootstrap']} "
+            f"resamplings). β = {BETA_MIN:g} marks outcomes one intensity separates exactly.")
+    files["table"] = write_atomically(out / "fragility.md", lambda tmp: Path(tmp).write_text(f"# {title}\n\n" + "\n".join(md) + f"\n\n{note}\n",
+                                                                                          encoding="utf-8"))
+    plt.close(plot_suite_scales(ds, path=out / "least_scale.png", title=f"{title}: least overturning scale factor"))
+    plt.close(plot_fragility(ds, path=out / "fragility.png", title=f"{title}: fragility"))
+    files["least_scale_png"], files["fragility_png"] = out / "least_scale.png", out / "fragility.png"
+    return files
+
+
+__all__ = ["CalibrationReport", "calibration_report", "spectrum_files", "record_spectrum_files", "suite_files"]

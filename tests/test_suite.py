@@ -165,3 +165,51 @@ def test_fragility_edge_cases():
     assert sep["median"] == pytest.approx(np.sqrt(x[x <= 1.0].max() * x[x > 1.0].min()), rel=1e-12)
     with pytest.raises(jr.JaxrockInputError, match="im"):
         jr.fit_lognormal(-x, x > 1.0)
+
+
+# -- the command ---------------------------------------------------------------------------------------
+def test_suite_command_writes_the_dataset_tables_and_figures(tmp_path):
+    """`jaxrock suite`: the dataset holds the measures, the sweep, the least factors and the fit;
+    the fragility table is the fit of the stored outcomes at factor × PGA; the store resumes."""
+    import xarray as xr
+
+    from helpers import invoke, read_csv
+
+    recs = [str(SHARED / "records" / "ARL360.at2")] if SHARED.is_dir() else []
+    args = ("suite", *recs, "elcentro", "--model", "rigid", "--height", "1,4", "--scale", "0.5:3:6", "--refine", "3",
+            "--boot", "50", "--out", tmp_path / "s", "-q")
+    r = invoke(*args)
+    assert r.exit_code == 0, r.output
+    for name in ("suite.zarr", "least_scale.csv", "least_scale.png", "fragility.csv", "fragility.md", "fragility.png", "rigid.zarr"):
+        assert (tmp_path / "s" / name).exists(), name
+    ds = xr.open_zarr(tmp_path / "s" / "suite.zarr").load()
+    assert list(ds.model.values) == ["rigid"] and ds.sizes["record"] == len(recs) + 1
+    rows = read_csv(tmp_path / "s" / "fragility.csv")
+    for i, row in enumerate(rows):
+        one = ds.isel(model=0, height=i)
+        x = one.scale.values[None, :] * one.pga.values[:, None]
+        fit = jr.fit_lognormal(x, one.overturned.values, np.repeat(np.arange(x.shape[0])[:, None], x.shape[1], 1), n_boot=50)
+        assert float(row["median"]) == fit["median"] and float(row["beta"]) == fit["beta"]
+        assert int(row["n_overturned"]) == int(one.overturned.sum())
+    assert all(np.isfinite(float(row["least_scale"])) == (row["bracket_low"] != "nan") for row in read_csv(tmp_path / "s" / "least_scale.csv"))
+    again = invoke(*args)  # the sweep's store is resumed: the same numbers
+    assert again.exit_code == 0, again.output
+    assert xr.open_zarr(tmp_path / "s" / "suite.zarr").load().least_scale.equals(ds.least_scale)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--model", "rigid,block"], "--model"),
+    (["--im", "sa"], "im"),
+    (["--scale", "2"], "--scale"),
+    (["--refine", "-1"], "--refine"),
+    (["--height", "0"], "height"),
+    (["--boot", "0"], "--boot"),
+    (["nowhere/x.AT2"], "records"),
+])
+def test_suite_command_refuses_bad_input_in_one_line(tmp_path, args, words):
+    from helpers import invoke
+
+    r = invoke("suite", *args, "--out", tmp_path / "s", "-q")
+    assert r.exit_code == 2, r.output
+    assert words in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert not (tmp_path / "s" / "rigid.zarr").exists()

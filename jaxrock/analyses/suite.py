@@ -88,4 +88,106 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     return ds
 
 
-__all__ = ["least_overturning_scale"]
+def _check_im(im: str) -> None:
+    from ..intensity import SCALING
+
+    if im != "scale" and im not in SCALING:
+        raise JaxrockInputError(f"im = {im!r}; valid: scale, {', '.join(SCALING)}")
+
+
+def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None, seed: int = 0):
+    """The lognormal fragility (`jaxrock.analyses.fragility.fit_lognormal`) of each column of a
+    suite's sweep `ds` (`least_overturning_scale`'s dataset), against the intensity `im`: a
+    measure of `jaxrock.intensity.SCALING` ("pga", "pgv", "pgd", "arias"; of the scaled record:
+    factor^power × the record's measure, from `measures`, `suite_measures`) or "scale" (the
+    factor itself). The observations are every record × factor of the sweep whose run ended ok
+    (the others are counted in `n_failed`); the bootstrap resamples records. Returns an
+    `xarray.Dataset` over the sweep's axes without `record` and `scale`: `median` [the measure's
+    units], `beta`, their 5–95 % intervals (`median_ci`, `beta_ci`, dimension `bound`), the
+    bootstrap fits (`median_boot`, `beta_boot`, dimension `bootstrap`), `n`, `n_overturned`, `n_failed`."""
+    import xarray as xr
+
+    from ..intensity import MEASURES, SCALING
+    from .fragility import N_BOOT, fit_lognormal
+
+    _check_im(im)
+    n_boot = N_BOOT if n_boot is None else int(n_boot)
+    scale = ds.scale.values
+    if im == "scale":
+        x = np.broadcast_to(scale, (ds.sizes["record"], scale.size))
+        units = "1"
+    else:
+        x = scale[None, :] ** SCALING[im] * measures[im].sel(record=ds.record).values[:, None]
+        units = MEASURES[im][1]
+    group = np.broadcast_to(np.arange(ds.sizes["record"])[:, None], x.shape)
+    over = ds.overturned.transpose("record", ..., "scale").values
+    status = ds.status.transpose("record", ..., "scale").values
+    cell_shape = over.shape[1:-1]
+    fits = []
+    for idx in np.ndindex(*cell_shape):
+        o, st = over[(slice(None), *idx)], status[(slice(None), *idx)]
+        ok = st == 0
+        if not ok.any():
+            fits.append(None)
+            continue
+        f = fit_lognormal(x[ok], o[ok], group[ok], n_boot=n_boot, seed=seed)
+        f["n_failed"] = int((~ok).sum())
+        fits.append(f)
+    blank = {"median": np.nan, "beta": np.nan, "median_ci": np.full(2, np.nan), "beta_ci": np.full(2, np.nan),
+             "median_boot": np.full(n_boot, np.nan), "beta_boot": np.full(n_boot, np.nan), "n": 0, "n_overturned": 0}
+    fits = [f if f is not None else {**blank, "n_failed": int(over.shape[0] * over.shape[-1])} for f in fits]
+    get = lambda key: np.array([f[key] for f in fits]).reshape(*cell_shape, *np.shape(fits[0][key]))
+    dims = tuple(d for d in ds.overturned.dims if d not in ("record", "scale"))
+    what = "scale factor" if im == "scale" else MEASURES[im][0]
+    out = xr.Dataset(
+        {
+            "median": (dims, get("median"), {"long_name": f"fragility median: {what} at 50 % probability of overturning", "units": units}),
+            "beta": (dims, get("beta"), {"long_name": "fragility dispersion (lognormal standard deviation)", "units": "1"}),
+            "median_ci": ((*dims, "bound"), get("median_ci"), {"long_name": "bootstrap 5-95 % interval of median", "units": units}),
+            "beta_ci": ((*dims, "bound"), get("beta_ci"), {"long_name": "bootstrap 5-95 % interval of beta", "units": "1"}),
+            "median_boot": ((*dims, "bootstrap"), get("median_boot"), {"long_name": "median of each bootstrap fit", "units": units}),
+            "beta_boot": ((*dims, "bootstrap"), get("beta_boot"), {"long_name": "beta of each bootstrap fit", "units": "1"}),
+            "n": (dims, get("n").astype(np.int32), {"long_name": "observations (record x factor runs ending ok)"}),
+            "n_overturned": (dims, get("n_overturned").astype(np.int32), {"long_name": "observations that overturned"}),
+            "n_failed": (dims, get("n_failed").astype(np.int32), {"long_name": "runs left out: status not ok"}),
+        },
+        coords={**{d: ds[d] for d in dims}, "bound": ("bound", np.array([5.0, 95.0]), {"units": "percent"})},
+        attrs={"im": im, "im_units": units, "n_boot": n_boot, "seed": seed,
+               "fit": "lognormal CDF by maximum likelihood of the sweep's outcomes (Baker 2015, multiple stripes); bootstrap over records"},
+    )
+    return out
+
+
+def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boot: int | None = None, store_dir=None,
+              progress: bool = True, history: str | None = None, integrator=None, **quantities):
+    """A record suite for each model kind of `models` (e.g. ("rigid", "spring", "spring-flexible")):
+    the record sweep of `records` × `quantities` (the column's axes or fixed values, as `Sweep.make`)
+    × `scale`, its least overturning factors (`least_overturning_scale`, `refine` bisections) and
+    its fragility against `im` (`suite_fragility`), with the records' measures
+    (`jaxrock.intensity.suite_measures`). Returns one `xarray.Dataset` with a `model` dimension.
+    `store_dir`: each model's sweep is kept in `<store_dir>/<model>.zarr` (a rerun resumes it)."""
+    from pathlib import Path
+
+    import xarray as xr
+
+    from ..intensity import suite_measures
+
+    if isinstance(models, str):
+        models = (models,)
+    _check_im(im)
+    sweeps = [Sweep.make(m, records=records, scale=scale, integrator=integrator, **quantities) for m in models]  # every input checked first
+    measures = suite_measures(sweeps[0].records)
+    parts = []
+    for m, sweep in zip(models, sweeps):
+        store = None if store_dir is None else Path(store_dir) / f"{m}.zarr"
+        ds = least_overturning_scale(sweep, store, refine=refine, progress=progress, history=history)
+        frag = suite_fragility(ds, measures, im, n_boot=n_boot)
+        parts.append(xr.merge([ds, frag.rename({k: f"fragility_{k}" for k in frag.data_vars})], combine_attrs="override"))
+    out = xr.concat(parts, dim=xr.DataArray(np.asarray(list(models), dtype=object), dims="model", name="model"),  # object: a Zarr v3 string
+                    combine_attrs="drop_conflicts")
+    out = xr.merge([out, measures], combine_attrs="override")
+    out.attrs.update({"title": "jaxrock record suite", "im": im, "refine": int(refine)})
+    return out
+
+
+__all__ = ["least_overturning_scale", "suite_fragility", "run_suite"]

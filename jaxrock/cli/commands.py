@@ -412,6 +412,77 @@ def sweep(
     _exit_if_untrusted(_status_counts(ds.status.values), "scene(s)")
 
 
+@app.command()
+@_guarded
+def suite(
+    records: Optional[list[str]] = typer.Argument(None, help="record files, folders of records (.AT2, .txt, .dat, .csv) and "
+                                                  f"'{RECORD_ALIASES[1]}' (the packaged El Centro 1940 NS); default: '{RECORD_ALIASES[1]}'"),
+    model: str = typer.Option("rigid,spring,spring-flexible", help=f"model kinds, comma-separated ({', '.join(model_kinds())}): "
+                              "each runs the same suite"),
+    height: str = typer.Option("1,2,4,8", help=f"full height 2h [m]: {_LIST}"),
+    tan_alpha: str = typer.Option("0.2", help=f"slenderness tanα: {_LIST}"),
+    scale: str = typer.Option("0.25:4:16", help="record factors of the sweep ('1,2,5' or 'a:b:n'): the fragility's observations, "
+                              "and the brackets the least overturning factor is bisected in"),
+    refine: int = typer.Option(5, help="bisections of each least overturning factor (resolution: the sweep's step / 2^refine)"),
+    im: str = typer.Option("pga", help="intensity measure of the fragility: pga [m/s2], pgv [m/s], pgd [m], arias [m/s], or scale"),
+    boot: int = typer.Option(500, help="bootstrap resamplings of the records (the fragility's band)"),
+    units: Optional[str] = typer.Option(None, help="acceleration units of two-column record files (default g)"),
+    out: Path = typer.Option(Path("out/suite"), help="output folder: suite.zarr, least_scale.csv/.png, fragility.csv/.md/.png, "
+                             "and each model's sweep store <model>.zarr (a rerun resumes it)"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    yes: bool = typer.Option(False, "--yes", help="run a suite estimated beyond 1 h"),
+):
+    """A record suite: each record's intensity measures, its least overturning scale factor for each
+    column (figure 10 for a suite: median and 16-84 % band) and the fragility of each column
+    (lognormal by maximum likelihood, bootstrap band), for each model."""
+    from .._validate import JaxrockInputError, check_writable
+    from ..analyses.suite import _check_im
+
+    kinds = [k.strip() for k in model.split(",") if k.strip()]
+    bad = [k for k in kinds if k not in model_kinds()]
+    if not kinds or bad:
+        raise JaxrockInputError(f"--model {model!r}: {', '.join(bad) or 'no model'}; valid: comma-separated {', '.join(model_kinds())}")
+    if refine < 0:
+        raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
+    _check_count("--boot", boot)
+    _check_im(im)
+    given = {}
+    for name, text in (("height", height), ("tan_alpha", tan_alpha)):
+        v = parse_values("--" + name.replace("_", "-"), text)
+        given[name] = float(v[0]) if v.size == 1 else v
+    sc = parse_values("--scale", scale)
+    if sc.size < 2:
+        raise JaxrockInputError(f"--scale {scale!r}: one factor; give at least 2 (the sweep whose outcomes are fitted)")
+    check_writable("--out", out / "fragility.csv")
+    _hold(out, "--out")
+    from ..io.records import read_records
+    from ..analyses.sweep import Sweep
+
+    recs = read_records(records or [RECORD_ALIASES[1]], units=units)
+    seconds = max(float(r.t_end - r.t_start) for r in recs)
+    for k in kinds:
+        sw = Sweep.make(k, records=recs, scale=sc, **given)  # every value checked before anything runs
+        per_run = RECORD_RUN_SECONDS * CELL_SECONDS[k] / CELL_SECONDS["rigid"] * seconds / 40.0
+        _estimate(sw.size + refine * sw.size // sc.size, k, yes, what=f"record runs ({k})", per_cell=per_run)
+    from ..analyses.suite import run_suite
+    from ..reports import suite_files
+
+    t0 = time.perf_counter()
+    ds = run_suite(kinds, recs, scale=sc, refine=refine, im=im, n_boot=boot, store_dir=out, progress=not quiet, history=_history(),
+                   **given)
+    secs = time.perf_counter() - t0
+    files = suite_files(ds, out, f"{len(recs)} records")
+    typer.echo(f"suite: {len(recs)} records × {len(kinds)} model(s) × {ds.sizes['scale']} factors"
+               + "".join(f" × {len(v)} {k}" for k, v in given.items() if np.ndim(v)) + f" in {secs:.1f} s")
+    typer.echo(f"{'record':<24}{'PGA [g]':>9}{'PGV [m/s]':>11}{'D5-95 [s]':>11}")
+    for r in range(ds.sizes["record"]):
+        one = ds.isel(record=r)
+        typer.echo(f"{str(one.record.values)[:23]:<24}{float(one.pga) / 9.81:9.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
+    typer.echo(Path(files["table"]).read_text(encoding="utf-8").split("\n\n")[1])
+    typer.echo("wrote " + ", ".join(str(p) for p in files.values()))
+    _exit_if_untrusted(_status_counts(ds.worst_status.values), "column(s) × record(s)")
+
+
 def _local_devices(n: Optional[int]):
     import jax
 
