@@ -387,41 +387,50 @@ def _suite_panels(ds, var):
     return panels
 
 
-def plot_suite_scales(ds, *, path=None, title=None):
-    """The least overturning scale factor of a suite against 2h (paper figure 10 for a suite): one
-    thin line per record, the median over the records and the 16–84 % band (order statistics: a
-    record that no factor of the sweep overturns counts as the largest; where a statistic is such a
-    record the line stops and a triangle marks the top). `ds`: `jaxrock.analyses.suite.run_suite`."""
-    panels = _suite_panels(ds, "least_scale")
+def _suite_figure(ds, var, draw, path, title):
+    """A suite figure: `draw(ax, sub, first_column)` (returning the panel's data) in each panel of
+    `_suite_panels(ds, var)`, titled by its model and values."""
+    panels = _suite_panels(ds, var)
     nr, nc = len(panels), len(panels[0])
     fig, axes = plt.subplots(nr, nc, figsize=(4.2 * nc, 3.4 * nr), squeeze=False, sharey=True)
     data = []
     for r, row in enumerate(panels):
         for c, (label, sub) in enumerate(row):
-            ax = axes[r, c]
-            h = np.atleast_1d(sub.height.values)
-            s = np.asarray(sub.least_scale.transpose("record", ...).values, dtype=float).reshape(sub.sizes["record"], h.size)
-            for line in s:
-                fin = np.isfinite(line)
-                ax.plot(h[fin], line[fin], "-", color="0.6", lw=0.8)
-            lo, med, hi = np.percentile(s, [16.0, 50.0, 84.0], axis=0, method="inverted_cdf")
-            ceiling = 1.1 * np.max(s[np.isfinite(s)], initial=1.0)  # a band up to "never overturned" reaches the top
-            ax.fill_between(h, np.minimum(lo, ceiling), np.minimum(hi, ceiling), color="C0", alpha=0.25, label="16–84 %")
-            fin = np.isfinite(med)
-            ax.plot(h[fin], med[fin], "o-", color="C0", lw=2, ms=4, label="median")
-            if (~fin).any():
-                ax.plot(h[~fin], np.ones((~fin).sum()), "^", color="C0", transform=ax.get_xaxis_transform(), clip_on=False)
-            ax.set_title(label, fontsize=9)
-            ax.set_xlabel("2h [m]")
-            if c == 0:
-                ax.set_ylabel("least overturning scale factor")
-            ax.set_ylim(bottom=0)
-            data.append({"label": label, "height": h, "scale": s, "median": med, "p16": lo, "p84": hi})
-    axes[0, 0].legend(fontsize=8)
+            axes[r, c].set_title(label, fontsize=9)
+            data.append({"label": label, **draw(axes[r, c], sub, c == 0)})
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return _finish(fig, path, data)
+
+
+def plot_suite_scales(ds, *, path=None, title=None):
+    """The least overturning scale factor of a suite against 2h (paper figure 10 for a suite): one
+    thin line per record, the median over the records and the 16–84 % band (order statistics: a
+    record that no factor of the sweep overturns counts as the largest; where a statistic is such a
+    record the line stops and a triangle marks the top). `ds`: `jaxrock.analyses.suite.run_suite`."""
+
+    def draw(ax, sub, first):
+        h = np.atleast_1d(sub.height.values)
+        s = np.asarray(sub.least_scale.transpose("record", ...).values, dtype=float).reshape(sub.sizes["record"], h.size)
+        for line in s:
+            fin = np.isfinite(line)
+            ax.plot(h[fin], line[fin], "-", color="0.6", lw=0.8)
+        lo, med, hi = np.percentile(s, [16.0, 50.0, 84.0], axis=0, method="inverted_cdf")
+        ceiling = 1.1 * np.max(s[np.isfinite(s)], initial=1.0)  # a band up to "never overturned" reaches the top
+        ax.fill_between(h, np.minimum(lo, ceiling), np.minimum(hi, ceiling), color="C0", alpha=0.25, label="16–84 %")
+        fin = np.isfinite(med)
+        ax.plot(h[fin], med[fin], "o-", color="C0", lw=2, ms=4, label="median")
+        if (~fin).any():
+            ax.plot(h[~fin], np.ones((~fin).sum()), "^", color="C0", transform=ax.get_xaxis_transform(), clip_on=False)
+        ax.set_xlabel("2h [m]")
+        if first:
+            ax.set_ylabel("least overturning scale factor")
+            ax.legend(fontsize=8)
+        ax.set_ylim(bottom=0)
+        return {"height": h, "scale": s, "median": med, "p16": lo, "p84": hi}
+
+    return _suite_figure(ds, "least_scale", draw, path, title)
 
 
 def plot_fragility(ds, *, path=None, title=None):
@@ -430,39 +439,32 @@ def plot_fragility(ds, *, path=None, title=None):
     `jaxrock.analyses.suite.run_suite`."""
     from .analyses.fragility import band, probability
 
-    panels = _suite_panels(ds, "fragility_median")
-    nr, nc = len(panels), len(panels[0])
     im, units = ds.attrs.get("im", "im"), ds["fragility_median"].attrs.get("units", "")
     med_all = np.asarray(ds.fragility_median.values, dtype=float)
     top = 2.0 * np.nanmax(med_all) if np.isfinite(med_all).any() else 1.0
     x = np.linspace(top / 400, top, 400)
-    fig, axes = plt.subplots(nr, nc, figsize=(4.2 * nc, 3.4 * nr), squeeze=False, sharey=True)
-    data = []
-    for r, row in enumerate(panels):
-        for c, (label, sub) in enumerate(row):
-            ax = axes[r, c]
-            heights = np.atleast_1d(sub.height.values)
-            for k, h in enumerate(heights):
-                one = sub.isel(height=k) if "height" in sub.dims else sub
-                m, b = float(one.fragility_median), float(one.fragility_beta)
-                if not np.isfinite(m):
-                    continue
-                p = probability(x, m, b)
-                lo, hi = band(x, one.fragility_median_boot.values, one.fragility_beta_boot.values)
-                ax.fill_between(x, lo, hi, color=f"C{k % 10}", alpha=0.2)
-                ax.plot(x, p, color=f"C{k % 10}", lw=1.8, label=f"2h = {h:g} m: θ = {m:.3g}, β = {b:.2f}")
-                ax.plot([m], [0.5], "o", color=f"C{k % 10}", ms=4)
-                data.append({"label": label, "height": float(h), "median": m, "beta": b, "x": x, "p": p, "p16": lo, "p84": hi})
-            ax.set_title(label, fontsize=9)
-            ax.set_xlabel(f"{im} [{units}]")
-            if c == 0:
-                ax.set_ylabel("P(overturn)")
-            ax.set_ylim(0, 1)
-            ax.legend(fontsize=7)
-    if title:
-        fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    return _finish(fig, path, data)
+
+    def draw(ax, sub, first):
+        curves = []
+        for k, h in enumerate(np.atleast_1d(sub.height.values)):
+            one = sub.isel(height=k) if "height" in sub.dims else sub
+            m, b = float(one.fragility_median), float(one.fragility_beta)
+            if not np.isfinite(m):
+                continue
+            p = probability(x, m, b)
+            lo, hi = band(x, one.fragility_median_boot.values, one.fragility_beta_boot.values)
+            ax.fill_between(x, lo, hi, color=f"C{k % 10}", alpha=0.2)
+            ax.plot(x, p, color=f"C{k % 10}", lw=1.8, label=f"2h = {h:g} m: θ = {m:.3g}, β = {b:.2f}")
+            ax.plot([m], [0.5], "o", color=f"C{k % 10}", ms=4)
+            curves.append({"height": float(h), "median": m, "beta": b, "x": x, "p": p, "p16": lo, "p84": hi})
+        ax.set_xlabel(f"{im} [{units}]")
+        if first:
+            ax.set_ylabel("P(overturn)")
+        ax.set_ylim(0, 1)
+        ax.legend(fontsize=7)
+        return {"curves": curves}
+
+    return _suite_figure(ds, "fragility_median", draw, path, title)
 
 
 __all__ += ["plot_suite_scales", "plot_fragility"]

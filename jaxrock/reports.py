@@ -165,11 +165,12 @@ def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
     tmp.rename(z)
     files["dataset"] = z
     cells = [d for d in ds.least_scale.dims if d not in ("model", "record")]
+    fixed = {c: float(ds[c]) for c in ds.coords if ds[c].ndim == 0}  # the sweep's fixed quantities (2h, tanα, ...)
     rows = []
     for idx in np.ndindex(*(ds.sizes[d] for d in ("model", "record", *cells))):
         sel = dict(zip(("model", "record", *cells), idx))
         one = ds.isel(sel)
-        rows.append({"model": str(one.model.values), "record": str(one.record.values), **{d: float(one[d]) for d in cells},
+        rows.append({"model": str(one.model.values), "record": str(one.record.values), **fixed, **{d: float(one[d]) for d in cells},
                      "least_scale": float(one.least_scale), "bracket_low": float(one.bracket_low),
                      "bracket_width": float(one.bracket_width), "windows": int(one.windows), "worst_status": int(one.worst_status)})
     files["least_scale"] = write_table(out / "least_scale.csv", rows)
@@ -182,7 +183,7 @@ def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
         m, b = float(one.fragility_median), float(one.fragility_beta)
         (m_lo, m_hi), (b_lo, b_hi) = one.fragility_median_ci.values, one.fragility_beta_ci.values
         vals = {d: float(one[d]) for d in cells}
-        rows.append({"model": str(one.model.values), **vals, "im": im, "median": m, "median_5": float(m_lo), "median_95": float(m_hi),
+        rows.append({"model": str(one.model.values), **fixed, **vals, "im": im, "median": m, "median_5": float(m_lo), "median_95": float(m_hi),
                      "beta": b, "beta_5": float(b_lo), "beta_95": float(b_hi), "n": int(one.fragility_n),
                      "n_overturned": int(one.fragility_n_overturned), "n_failed": int(one.fragility_n_failed)})
         md.append(f"| {one.model.values} | " + " | ".join(f"{v:g}" for v in vals.values()) + f" | {m:.4g} | {m_lo:.4g}–{m_hi:.4g} | "
@@ -191,7 +192,7 @@ def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
     note = (f"Lognormal fragility P = Φ(ln(x/θ)/β) by maximum likelihood of every record × factor outcome of the sweep "
             f"(Baker 2015, multiple stripes), x = {im}; intervals: bootstrap over records ({ds.fragility_median_boot.sizes['bootstrap']} "
             f"resamplings). β = {BETA_MIN:g} marks outcomes one intensity separates exactly.")
-    files["table"] = write_atomically(out / "fragility.md", lambda tmp: Path(tmp).write_text(f"# {title}\n\n" + "\n".join(md) + f"\n\n{note}\n",
+    files["table"] = write_atomically(out / "fragility.md", lambda tmp: Path(tmp).write_text(f"# {title}" + "".join(f", {k} = {v:g}" for k, v in fixed.items()) + "\n\n" + "\n".join(md) + f"\n\n{note}\n",
                                                                                           encoding="utf-8"))
     plt.close(plot_suite_scales(ds, path=out / "least_scale.png", title=f"{title}: least overturning scale factor"))
     plt.close(plot_fragility(ds, path=out / "fragility.png", title=f"{title}: fragility"))

@@ -136,7 +136,7 @@ def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None,
     blank = {"median": np.nan, "beta": np.nan, "median_ci": np.full(2, np.nan), "beta_ci": np.full(2, np.nan),
              "median_boot": np.full(n_boot, np.nan), "beta_boot": np.full(n_boot, np.nan), "n": 0, "n_overturned": 0}
     fits = [f if f is not None else {**blank, "n_failed": int(over.shape[0] * over.shape[-1])} for f in fits]
-    get = lambda key: np.array([f[key] for f in fits]).reshape(*cell_shape, *np.shape(fits[0][key]))
+    get = lambda key: np.array([f[key] for f in fits]).reshape(tuple(cell_shape) + np.shape(fits[0][key]))
     dims = tuple(d for d in ds.overturned.dims if d not in ("record", "scale"))
     what = "scale factor" if im == "scale" else MEASURES[im][0]
     out = xr.Dataset(
@@ -186,6 +186,7 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
     out = xr.concat(parts, dim=xr.DataArray(np.asarray(list(models), dtype=object), dims="model", name="model"),  # object: a Zarr v3 string
                     combine_attrs="drop_conflicts")
     out = xr.merge([out, measures], combine_attrs="override")
+    out = out.assign_coords({k: v for k, v in sweeps[0].fixed.items()})  # the fixed quantities as scalar coordinates
     out.attrs.update({"title": "jaxrock record suite", "im": im, "refine": int(refine)})
     return out
 

@@ -465,11 +465,19 @@ def suite(
         per_run = RECORD_RUN_SECONDS * CELL_SECONDS[k] / CELL_SECONDS["rigid"] * seconds / 40.0
         _estimate(sw.size + refine * sw.size // sc.size, k, yes, what=f"record runs ({k})", per_cell=per_run)
     from ..analyses.suite import run_suite
+    from ..io import store as zstore
     from ..reports import suite_files
 
+    from ..interrupt import Interrupted
+
     t0 = time.perf_counter()
-    ds = run_suite(kinds, recs, scale=sc, refine=refine, im=im, n_boot=boot, store_dir=out, progress=not quiet, history=_history(),
-                   **given)
+    try:
+        ds = run_suite(kinds, recs, scale=sc, refine=refine, im=im, n_boot=boot, store_dir=out, progress=not quiet,
+                       history=_history(), **given)
+    except Interrupted:
+        kept = ", ".join(f"{out / f'{k}.zarr'} ({zstore.kept_scenes(out / f'{k}.zarr'):,} runs)" for k in kinds if (out / f"{k}.zarr").is_dir())
+        typer.echo(f"interrupted: the sweeps kept in {kept or 'no store yet'}; resume with: {_resume_command()}", err=True)
+        raise typer.Exit(EXIT_INTERRUPTED) from None
     secs = time.perf_counter() - t0
     files = suite_files(ds, out, f"{len(recs)} records")
     typer.echo(f"suite: {len(recs)} records × {len(kinds)} model(s) × {ds.sizes['scale']} factors"
