@@ -12,8 +12,8 @@ import numpy as np
 import typer
 
 from . import guards
-from .guards import (CELL_SECONDS, EXIT_INTERRUPTED, EXIT_UNTRUSTED, RECORD_RUN_SECONDS, _estimate, _exit_if_untrusted, _guarded,
-                     _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts)
+from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untrusted, _guarded,
+                     _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import (DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MODEL_PARAMETERS, PULSES, RECORD_ALIASES,
                      UNDAMPED, model_kinds, parameter_help)
@@ -269,7 +269,7 @@ def record_spectrum(
     for suffix in (".nc", ".csv", ".png"):
         check_writable("--out", Path(f"{out}{suffix}"))
     _hold(out, "--out")
-    per_run = RECORD_RUN_SECONDS * CELL_SECONDS[model.value] / CELL_SECONDS["rigid"] * float(exc.t_end - exc.t_start) / 40.0
+    per_run = record_run_seconds(model.value, float(exc.t_end - exc.t_start))
     _estimate(hs.size * (sc.size + refine), model.value, yes, what="record runs", per_cell=per_run)
     from ..analyses.spectra import record_overturning_scale
     from ..reports import record_spectrum_files
@@ -371,7 +371,7 @@ def sweep(
                     backbone=None if backbone is None else backbone.value, chunk_size=chunk_size, **given)
     if recs:
         seconds = max(float(r.t_end - r.t_start) for r in recs)
-        per_run = RECORD_RUN_SECONDS * CELL_SECONDS[model.value] / CELL_SECONDS["rigid"] * seconds / 40.0
+        per_run = record_run_seconds(model.value, seconds)
         _estimate(sw.size, model.value, yes, what="record runs", per_cell=per_run)
     else:
         _estimate(sw.size, "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value, yes, what="scenes")
@@ -460,10 +460,12 @@ def suite(
 
     recs = read_records(records or [RECORD_ALIASES[1]], units=units)
     seconds = max(float(r.t_end - r.t_start) for r in recs)
+    runs = cost = 0.0
     for k in kinds:
         sw = Sweep.make(k, records=recs, scale=sc, **given)  # every value checked before anything runs
-        per_run = RECORD_RUN_SECONDS * CELL_SECONDS[k] / CELL_SECONDS["rigid"] * seconds / 40.0
-        _estimate(sw.size + refine * sw.size // sc.size, k, yes, what=f"record runs ({k})", per_cell=per_run)
+        n = sw.size + refine * sw.size // sc.size
+        runs, cost = runs + n, cost + n * record_run_seconds(k, seconds)
+    _estimate(int(runs), kinds[0], yes, what=f"record runs ({', '.join(kinds)})", per_cell=cost / runs)
     from ..analyses.suite import run_suite
     from ..io import store as zstore
     from ..reports import suite_files
