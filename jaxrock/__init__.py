@@ -4,7 +4,7 @@ Layers, top-down (each imports only from its own layer and those below; README "
 front ends (`cli`, `reports`, `plotting`) → analyses (`analyses`: the batch engine, spectra,
 calibration, scenes files) → input/output (`io`) → models with their integrators (`rigid`,
 `spring`) → the protocol (`model`: model → stepper, `simulate`; `bookkeeping`: what a run records)
-→ values (`geometry`, `excitation`, `results`) → the vocabulary (`scene`, `outputs`: the words and
+→ values (`geometry`, `excitation`, `results`, `intensity`) → the vocabulary (`scene`, `outputs`: the words and
 defaults of scenes and outputs, without JAX). Everything public is re-exported here.
 
 Importing jaxrock imports none of them, nor JAX: each name below is imported when first used (PEP

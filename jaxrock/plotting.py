@@ -396,7 +396,7 @@ def _suite_figure(ds, var, draw, path, title):
     data = []
     for r, row in enumerate(panels):
         for c, (label, sub) in enumerate(row):
-            axes[r, c].set_title(label, fontsize=9)
+            axes[r, c].set_title(label, fontsize=9, pad=14)
             data.append({"label": label, **draw(axes[r, c], sub, c == 0)})
     if title:
         fig.suptitle(title, fontsize=10)
@@ -423,7 +423,11 @@ def plot_suite_scales(ds, *, path=None, title=None):
         ax.plot(h[fin], med[fin], "o-", color="C0", lw=2, ms=4, label="median")
         if (~fin).any():
             ax.plot(h[~fin], np.ones((~fin).sum()), "^", color="C0", transform=ax.get_xaxis_transform(), clip_on=False)
-        ax.set_xlabel("2h [m]")
+        never = (~np.isfinite(s)).sum(0)
+        for hv, k in zip(h, never):  # records that no factor of the sweep overturns, above each size
+            if k:
+                ax.text(hv, 1.02, f"{k}/{s.shape[0]}", transform=ax.get_xaxis_transform(), ha="center", fontsize=7, color="0.4")
+        ax.set_xlabel("2h [m]  (k/n above: records no factor overturns)")
         if first:
             ax.set_ylabel("least overturning scale factor")
             ax.legend(fontsize=8)

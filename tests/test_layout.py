@@ -16,7 +16,7 @@ LAYERS = [
     ("input/output", ("io",)),
     ("models", ("rigid", "spring")),
     ("protocol", ("model", "bookkeeping")),
-    ("values", ("geometry", "excitation", "results")),
+    ("values", ("geometry", "excitation", "results", "intensity")),
     ("vocabulary", ("scene", "outputs")),  # words and defaults, without JAX
     ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "cache", "runtime", "__init__")),
 ]
