@@ -233,3 +233,18 @@ def test_suite_command_refuses_bad_input_in_one_line(tmp_path, args, words):
     assert r.exit_code == 2, r.output
     assert words in r.output and len(r.output.strip().splitlines()) == 1, r.output
     assert not (tmp_path / "s" / "rigid.zarr").exists()
+
+
+def test_a_list_file_names_a_suite(tmp_path):
+    """A `.list` file: one record file, folder or 'elcentro' per line, relative to the list, `#`
+    comments; the same records as naming them directly. A missing entry is refused with its line."""
+    from helpers import write
+
+    rec = write(tmp_path / "one.txt", "0 0.0\n0.01 0.1\n0.02 -0.05\n")
+    lst = write(tmp_path / "suite.list", "# my suite\none.txt\n\nelcentro   # the packaged record\n")
+    recs = jr.read_records([lst])
+    assert [r.name for r in recs] == ["one", "El Centro 1940 NS"]
+    assert np.array_equal(np.asarray(recs[0].acc), np.asarray(jr.read_record(rec).acc))
+    write(tmp_path / "bad.list", "one.txt\nmissing.AT2\n")
+    with pytest.raises(jr.JaxrockInputError, match="line 2: missing.AT2"):
+        jr.read_records([tmp_path / "bad.list"])

@@ -415,7 +415,7 @@ def sweep(
 @app.command()
 @_guarded
 def suite(
-    records: Optional[list[str]] = typer.Argument(None, help="record files, folders of records (.AT2, .txt, .dat, .csv) and "
+    records: Optional[list[str]] = typer.Argument(None, help="record files, folders of records (.AT2, .txt, .dat, .csv), list files (.list: one per line) and "
                                                   f"'{RECORD_ALIASES[1]}' (the packaged El Centro 1940 NS); default: '{RECORD_ALIASES[1]}'"),
     model: str = typer.Option("rigid,spring,spring-flexible", help=f"model kinds, comma-separated ({', '.join(model_kinds())}): "
                               "each runs the same suite"),

@@ -242,11 +242,31 @@ def read_record(path: str | os.PathLike, **kw) -> Record:
 
 
 RECORD_SUFFIXES = (".at2", ".txt", ".dat", ".csv")  # the files of a record folder (`read_records`)
+LIST_SUFFIX = ".list"  # a suite's list file (`read_records`)
+
+
+def _list_entries(path: Path) -> list[str]:
+    """The sources a list file names: one per line (a record file, a folder or an El Centro alias;
+    relative paths from the list file's folder), blank lines and `#` comments skipped."""
+    from ..scene import is_builtin_record
+
+    entries = []
+    for lineno, line in enumerate(_read_lines(path), start=1):
+        entry = line.split("#", 1)[0].strip()
+        if not entry:
+            continue
+        if not is_builtin_record(entry) and not (path.parent / entry).exists():
+            raise JaxrockInputError(f"{path}: line {lineno}: {entry}: no such file or folder (relative to {path.parent})")
+        entries.append(entry if is_builtin_record(entry) else str(path.parent / entry))
+    if not entries:
+        raise JaxrockInputError(f"{path}: the list names no record; expected one record file, folder or 'elcentro' per line")
+    return entries
 
 
 def read_records(sources, *, units: str | None = None) -> list[Record]:
     """Records for a suite: each source is a record file, a folder (its files ending in one of
-    `RECORD_SUFFIXES`, any case, sorted by name) or an alias of the packaged El Centro record
+    `RECORD_SUFFIXES`, any case, sorted by name), a list file (`*.list`: one such source per line,
+    relative to the list's folder, `#` comments) or an alias of the packaged El Centro record
     (`jaxrock.scene.RECORD_ALIASES`). Files are read by `read_record` and named by their file stem
     (unique within a folder); `units` as there. A folder without record files, a missing file or
     two records of one name is refused in one line."""
@@ -258,6 +278,9 @@ def read_records(sources, *, units: str | None = None) -> list[Record]:
             out.append(el_centro())
             continue
         path = Path(src)
+        if path.is_file() and path.suffix.lower() == LIST_SUFFIX:
+            out += read_records(_list_entries(path), units=units)
+            continue
         if path.is_dir():
             files = sorted(f for f in path.iterdir() if f.is_file() and f.suffix.lower() in RECORD_SUFFIXES)
             if not files:
