@@ -248,3 +248,32 @@ def test_a_list_file_names_a_suite(tmp_path):
     write(tmp_path / "bad.list", "one.txt\nmissing.AT2\n")
     with pytest.raises(jr.JaxrockInputError, match="line 2: missing.AT2"):
         jr.read_records([tmp_path / "bad.list"])
+
+
+@needs_shared
+def test_interrupted_suite_resumes_to_the_same_numbers(tmp_path):
+    """A real `jaxrock suite` process stopped by SIGINT after its first record's chunk (in the sweep
+    or, warm, already in the bisection): exit 130, what the store keeps and the resume command; the
+    same command then finishes with the numbers of an uninterrupted run."""
+    import signal
+
+    import xarray as xr
+
+    from helpers import Watch, jaxrock_process
+
+    args = ("suite", SHARED / "records" / "ARL360.at2", SHARED / "records" / "elCentro_peknold.AT2", "elcentro", "--model", "rigid",
+            "--height", "1,4", "--scale", "0.25:4:16", "--refine", "3", "--boot", "20")
+    whole = jaxrock_process(*args, "--out", tmp_path / "whole", "-q", cwd=tmp_path)
+    assert whole.wait(300) == 0, whole.stderr.read()
+    w = Watch(jaxrock_process(*args, "--out", tmp_path / "cut", cwd=tmp_path))
+    w.wait_for(r"\b32/96")
+    w.proc.send_signal(signal.SIGINT)
+    rc, out, err = w.finish()
+    assert rc == 130 and "interrupted: the sweeps kept in" in err and "resume with: jaxrock suite" in err, err[-500:]
+    kept = int(xr.open_zarr(tmp_path / "cut" / "rigid.zarr", chunks=None).chunk_done.sum())
+    assert 1 <= kept <= 3, kept  # the stop lands in the sweep (its finished chunks kept) or in the bisection (rerun)
+    again = jaxrock_process(*args, "--out", tmp_path / "cut", "-q", cwd=tmp_path)
+    assert again.wait(300) == 0, again.stderr.read()
+    a, b = (xr.open_zarr(tmp_path / d / "suite.zarr", chunks=None) for d in ("whole", "cut"))
+    for name in ("least_scale", "bracket_low", "overturned", "fragility_median", "fragility_beta", "pga"):
+        assert a[name].equals(b[name]), name
