@@ -90,6 +90,21 @@ def test_least_scale_brackets_and_flags():
             assert np.all(out["overturned"] == expect), (records[r].name, ends, out["overturned"])
 
 
+def test_bisection_is_kept_beside_the_store(tmp_path, monkeypatch):
+    """With a store, each record's finished bisection is kept (`<store>.bisection.npz`): a rerun
+    runs nothing and returns the same numbers; one with another `refine` bisects afresh."""
+    from jaxrock.analyses import suite
+
+    sweep = jr.Sweep.make("rigid", records=[jr.el_centro()], height=[1.0, 4.0], tan_alpha=0.2, scale=np.linspace(0.5, 3, 6))
+    first = jr.least_overturning_scale(sweep, tmp_path / "s.zarr", refine=4, progress=False)
+    assert (tmp_path / "s.zarr.bisection.npz").is_file()
+    monkeypatch.setattr(suite, "run_values", lambda *a, **k: pytest.fail("a kept bisection was run again"))
+    again = jr.least_overturning_scale(sweep, tmp_path / "s.zarr", refine=4, progress=False)
+    assert again.least_scale.equals(first.least_scale) and again.bracket_low.equals(first.bracket_low)
+    with pytest.raises(pytest.fail.Exception, match="run again"):
+        jr.least_overturning_scale(sweep, tmp_path / "s.zarr", refine=5, progress=False)
+
+
 def test_least_scale_equals_brute_force_scan_of_its_bracket():
     """A brute-force scan of each cell's first overturning interval of the sweep, at the bracket
     width (the dyadic points the bisection may visit, run as one batch of their own): the bisected

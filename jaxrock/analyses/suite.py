@@ -38,8 +38,9 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
       sweep's step / 2^refine), and `worst_status`, the largest status code of the cell's runs
       (sweep and bisection: 0 = every run ok), and `windows` (module docstring).
 
-    `store`, `progress`, `devices`, `history` as `run_sweep` (the sweep is resumable; the
-    bisection is rerun)."""
+    `store`, `progress`, `devices`, `history` as `run_sweep`. With a store, each record's finished
+    bisection is kept beside it (`<store>.bisection.npz`, written atomically, with the store's
+    description and `refine`): an interrupted run resumes both."""
     from tqdm.auto import tqdm
 
     from .. import interrupt
@@ -59,10 +60,11 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     worst = status.max(axis=-1)
     cell_dims = sweep.dims[1:-1]
     cells = sweep.values_at(tuple(slice(0, len(sweep.axes[d])) for d in cell_dims), cell_dims)  # every column, C order
+    kept = _Bisections(store, ds.attrs["made_by"], int(refine), hi, lo, worst)
     with tqdm(total=len(sweep.records) * int(refine), desc="bisection", unit="batch", disable=not progress) as bar:
         for r in range(len(sweep.records)):
             todo = has[r].ravel()
-            if not todo.any():
+            if not todo.any() or kept.done[r]:
                 bar.update(int(refine))
                 continue
             h, l, w = hi[r].ravel().copy(), lo[r].ravel().copy(), worst[r].ravel().copy()
@@ -77,6 +79,7 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
                 w[todo] = np.maximum(w[todo], out["status"])
                 bar.update()
             hi[r], lo[r], worst[r] = h.reshape(hi[r].shape), l.reshape(lo[r].shape), w.reshape(worst[r].shape)
+            kept.finished(r)
     dims = sweep.dims[:-1]
     ds["least_scale"] = (dims, hi, {"long_name": "least scale factor that overturns (inf: none of the sweep)", "units": "1"})
     ds["bracket_low"] = (dims, lo, {"long_name": "largest scale factor below least_scale known not to overturn", "units": "1"})
@@ -86,6 +89,40 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     ds["worst_status"] = (dims, worst.astype(np.int32), {"long_name": "largest jaxrock.Status code of the cell's runs (0: all ok)"})
     ds.attrs["refine"] = int(refine)
     return ds
+
+
+class _Bisections:
+    """The bisections finished so far, kept beside the sweep's store (`<store>.bisection.npz`):
+    loaded into `hi`, `lo`, `worst` (in place) when made by the same sweep and `refine`."""
+
+    def __init__(self, store, made_by: str, refine: int, hi, lo, worst):
+        from pathlib import Path
+
+        self.path = None if store is None else Path(f"{store}.bisection.npz")
+        self.key, self.arrays = np.array(f"{made_by}\nrefine={refine}"), (hi, lo, worst)
+        self.done = np.zeros(hi.shape[0], dtype=bool)
+        if self.path is not None and self.path.is_file():
+            try:
+                with np.load(self.path) as f:
+                    if str(f["key"]) == str(self.key) and f["hi"].shape == hi.shape:
+                        self.done = f["done"].copy()
+                        for a, name in zip(self.arrays, ("hi", "lo", "worst")):
+                            a[self.done] = f[name][self.done]
+            except Exception:  # unreadable (a crash while writing cannot leave one: it is renamed whole): run again
+                self.done[:] = False
+
+    def finished(self, r: int) -> None:
+        self.done[r] = True
+        if self.path is not None:
+            from ..io.files import write_atomically
+
+            hi, lo, worst = self.arrays
+
+            def write(tmp):
+                with open(tmp, "wb") as fh:
+                    np.savez(fh, key=self.key, done=self.done, hi=hi, lo=lo, worst=worst)
+
+            write_atomically(self.path, write)
 
 
 def _check_im(im: str) -> None:
