@@ -88,7 +88,7 @@ def test_usage_errors_are_one_line_exit_2(args, needle):
 
 
 def test_every_command_has_help():
-    for cmd in ("spectrum", "simulate", "batch", "record-spectrum", "calibrate"):
+    for cmd in ("spectrum", "simulate", "batch", "record-spectrum", "sweep", "suite", "calibrate"):
         r = invoke(cmd, "--help")
         assert r.exit_code == 0, (cmd, r.output)
         assert "Usage" in r.output
