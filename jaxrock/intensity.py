@@ -15,13 +15,13 @@ is read (its `scale` applied), in SI units:
 - `dt` [s], `duration` [s] = (n − 1) dt.
 
 A record's measure scales with the record (`pga`, `pgv`, `pgd` linearly, `arias` quadratically),
-so the intensity of a scaled record is its factor times the measure (`jaxrock.analyses.fragility`).
+so the intensity of a record scaled by s is s^power times its measure (`SCALING`; used by
+`jaxrock.analyses.suite.suite_fragility`).
 """
 
 from __future__ import annotations
 
 import numpy as np
-
 
 MEASURES = {  # name → (long name, units)
     "pga": ("peak ground acceleration", "m/s2"),

@@ -38,8 +38,9 @@ BAND = (16.0, 84.0)  # percentiles of the bootstrap band (the field's ±1σ band
 
 
 def _loglik_terms(a, b, lnx, y):
+    """Each observation's log-likelihood term, ln Φ(z) (overturned) or ln Φ(−z), z = a + b ln x."""
     z = a[..., None] + b[..., None] * lnx
-    return np.where(y, log_ndtr(z), log_ndtr(-z)), z
+    return np.where(y, log_ndtr(z), log_ndtr(-z))
 
 
 def _fit_weighted(lnx: np.ndarray, y: np.ndarray, w: np.ndarray, iterations: int = 100) -> tuple[np.ndarray, np.ndarray]:
@@ -52,8 +53,7 @@ def _fit_weighted(lnx: np.ndarray, y: np.ndarray, w: np.ndarray, iterations: int
     b_max = 1.0 / BETA_MIN
 
     def ll(a, b):
-        terms, _ = _loglik_terms(a, b, lnx, y)
-        return (w * terms).sum(1)
+        return (w * _loglik_terms(a, b, lnx, y)).sum(1)
 
     cur = ll(a, b)
     for _ in range(iterations):

@@ -467,10 +467,10 @@ def suite(
         runs, cost = runs + n, cost + n * record_run_seconds(k, seconds)
     _estimate(int(runs), kinds[0], yes, what=f"record runs ({', '.join(kinds)})", per_cell=cost / runs)
     from ..analyses.suite import run_suite
+    from ..geometry import G
+    from ..interrupt import Interrupted
     from ..io import store as zstore
     from ..reports import suite_files
-
-    from ..interrupt import Interrupted
 
     t0 = time.perf_counter()
     try:
@@ -487,7 +487,7 @@ def suite(
     typer.echo(f"{'record':<24}{'PGA [g]':>9}{'PGV [m/s]':>11}{'D5-95 [s]':>11}")
     for r in range(ds.sizes["record"]):
         one = ds.isel(record=r)
-        typer.echo(f"{str(one.record.values)[:23]:<24}{float(one.pga) / 9.81:9.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
+        typer.echo(f"{str(one.record.values)[:23]:<24}{float(one.pga) / G:9.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
     typer.echo(Path(files["table"]).read_text(encoding="utf-8").split("\n\n")[1])
     typer.echo("wrote " + ", ".join(str(p) for p in files.values()))
     _exit_if_untrusted(_status_counts(ds.worst_status.values), "column(s) × record(s)")

@@ -52,11 +52,6 @@ CELL_SECONDS = {"rigid": 0.19e-3, "spring": 1.47e-3, "spring-ga": 0.092e-3, "spr
 # runs) takes 26-29 s; the default suite's sweeps (5 records, 320 runs per model) ran the
 # quasi-rigid SM 1.5 times and the flexible SM 4.3 times as long as the rigid model
 RECORD_RUN_SECONDS = {"rigid": 0.15, "spring": 0.23, "spring-flexible": 0.65}
-
-
-def record_run_seconds(kind: str, seconds: float) -> float:
-    """The estimated cost of one run of a `seconds`-long record with a model of `kind`."""
-    return RECORD_RUN_SECONDS.get(kind, RECORD_RUN_SECONDS["spring-flexible"]) * seconds / 40.0  # a registered kind: the dearest
 CELL_BYTES = 64  # a_p, ω_p, the grid, the results and the checkpoint's copy, per cell
 LIMIT_SECONDS, LIMIT_BYTES = 3600.0, 2e9
 EXIT_UNTRUSTED = 1  # the work ran, but some run ended with a status other than ok
@@ -80,6 +75,11 @@ def _fail(msg: str):
 
 def _duration(seconds: float) -> str:
     return f"{seconds:.0f} s" if seconds < 120 else (f"{seconds / 60:.0f} min" if seconds < 7200 else f"{seconds / 3600:.1f} h")
+
+
+def record_run_seconds(kind: str, seconds: float) -> float:
+    """The estimated cost of one run of a `seconds`-long record with a model of `kind`."""
+    return RECORD_RUN_SECONDS.get(kind, RECORD_RUN_SECONDS["spring-flexible"]) * seconds / 40.0  # a registered kind: the dearest
 
 
 def _estimate(n_cells: int, kind: str, yes: bool, what: str = "cells", per_cell: float | None = None) -> None:
