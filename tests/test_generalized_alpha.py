@@ -269,7 +269,7 @@ def test_undamped_energy_conserved_after_pulse(kind):
 # ----------------------------------------------------------------------------------------------
 # 4. fixed base
 # ----------------------------------------------------------------------------------------------
-FB_FIELDS = ("theta", "u_top", "base_moment")
+FB_FIELDS = ("theta", "u_top", "base_moment", "section_moment")
 FB_N = 2000
 
 
@@ -296,6 +296,8 @@ def test_fixed_base_quasi_static_cantilever():
     assert np.all(H["theta"] == 0.0) and float(s.max_theta) == 0.0 and not bool(s.overturned)
     assert np.all(np.isfinite(H["base_moment"])) and np.all(np.isfinite(H["u_top"]))
     assert np.max(np.abs(H["base_moment"])) / (m * a_p * L / 2) == pytest.approx(1.0, abs=1.5e-2)
+    # the clamped base node does not turn: the lowest section carries the reaction moment exactly
+    np.testing.assert_allclose(H["section_moment"], H["base_moment"], rtol=1e-9, atol=1e-9 * np.max(np.abs(H["base_moment"])))
     assert np.max(np.abs(H["u_top"])) / (m * a_p / L * L**4 / (8 * EI)) == pytest.approx(1.0, abs=4e-2)
 
 

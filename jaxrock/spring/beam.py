@@ -93,6 +93,28 @@ def local_forces(d, h, n: int, EA, EI):
     return EA / L0 * e, EI / L0 * (4 * t1 + 2 * t2), EI / L0 * (2 * t1 + 4 * t2)
 
 
+def _element_forces(q, v, h, n: int, EA, EI, a1):
+    """Every element's local forces (N, M₁, M₂), each stacked [elastic, Rayleigh], and its chord
+    (Δx, Δy, L, L²)."""
+    d = element_deformations(q, h, n)
+    dx, dy, _ = _chords(q, h, n)  # (L and β: the same expressions as d's, computed once by XLA)
+    dvx, dvy, vphi = _chords(v, 0.0 * h, n)  # node velocities (no rest heights)
+    L2 = dx**2 + dy**2
+    L = jnp.sqrt(L2)
+    beta_dot = (dy * dvx - dx * dvy) / L2
+    d_dot = ((dx * dvx + dy * dvy) / L, vphi[:-1] - beta_dot, vphi[1:] - beta_dot)
+    forces = tuple(jnp.stack([a, a1 * b]) for a, b in zip(local_forces(d, h, n, EA, EI), local_forces(d_dot, h, n, EA, EI)))
+    return forces, (dx, dy, L, L2)
+
+
+def base_section_moment(q, v, h, n: int, EA, EI, a1):
+    """The bending moment in the column's lowest section [N·m]: the first element's end moment at its
+    lower node, elastic plus Rayleigh (paper figure 17's "bending moment at the base"), with the
+    sign of the base's reaction moment (−M₁)."""
+    (_, M1, _), _ = _element_forces(q, v, h, n, EA, EI, a1)
+    return -(M1[0, 0] + M1[1, 0])
+
+
 def internal_forces(q, v, h, n: int, EA, EI, a1):
     """(∇U, a₁ Jᵀ K_e J v): the gradient of `strain_energy` and the Rayleigh force on the element
     deformations, in closed form. d = (L − L₀, φ_i − β, φ_j − β) has the Jacobian J with
@@ -101,15 +123,7 @@ def internal_forces(q, v, h, n: int, EA, EI, a1):
     ±(N Δx/L − (M₁ + M₂) Δy/L², N Δy/L + (M₁ + M₂) Δx/L²) and M₁, M₂ on φ_i, φ_j. The same as
     `jax.grad(strain_energy)` and the transposed linearisation (tests/test_spring.py), without
     the pads and splits of the autodiff transpose, which cost ~5× more under `vmap` on CPU."""
-    d = element_deformations(q, h, n)
-    dx, dy, _ = _chords(q, h, n)  # (L and β: the same expressions as d's, computed once by XLA)
-    dvx, dvy, vphi = _chords(v, 0.0 * h, n)  # node velocities (no rest heights)
-    L2 = dx**2 + dy**2
-    L = jnp.sqrt(L2)
-    beta_dot = (dy * dvx - dx * dvy) / L2
-    d_dot = ((dx * dvx + dy * dvy) / L, vphi[:-1] - beta_dot, vphi[1:] - beta_dot)
-    # both force sets at once: leading axis [elastic, damping]
-    N, M1, M2 = (jnp.stack([a, a1 * b]) for a, b in zip(local_forces(d, h, n, EA, EI), local_forces(d_dot, h, n, EA, EI)))
+    (N, M1, M2), (dx, dy, L, L2) = _element_forces(q, v, h, n, EA, EI, a1)
     fx = N * dx / L - (M1 + M2) * dy / L2
     fy = N * dy / L + (M1 + M2) * dx / L2
     f_j = jnp.stack([fx, fy, M2], axis=-1)  # (2, n, 3): on the element's upper node j

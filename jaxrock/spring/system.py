@@ -20,6 +20,7 @@ HISTORY_FIELDS = (
     "u_top",
     "w_top",
     "base_moment",
+    "section_moment",
     "kinetic",
     "potential",
     "dissipated",
@@ -283,6 +284,9 @@ class SpringSystem(eqx.Module):
                 out[name] = u - 2 * self.h * jnp.sin(theta)
             elif name == "base_moment":
                 out[name] = self.base_moment(t, q, v, excitation)
+            elif name == "section_moment":  # the one-DOF column transmits the base moment
+                out[name] = (self.base_moment(t, q, v, excitation) if self.n is None
+                             else beam.base_section_moment(q, v, self.h, self.n, self.EA, self.EI, self.a1))
             elif name == "kinetic":
                 out[name] = self.kinetic(v)
             elif name == "potential":
