@@ -472,3 +472,27 @@ def plot_fragility(ds, *, path=None, title=None):
 
 
 __all__ += ["plot_suite_scales", "plot_fragility"]
+
+
+def plot_curves(panels, *, ncols=None, path=None, title=None):
+    """Line panels side by side (paper figures 3 and 4): `panels` is a list of dicts with `title`,
+    `xlabel`, `ylabel` and `lines`, {label: (x, y)}; a label starting with "paper" is drawn dashed
+    (a closed form of the paper), the others solid (jaxrock's models); `ncols` panels a row."""
+    ncols = len(panels) if ncols is None else ncols
+    nrows = -(-len(panels) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(4.6 * ncols, 3.6 * nrows), squeeze=False, constrained_layout=True)
+    data = {}
+    for k, (ax, panel) in enumerate(zip(axes.ravel(), panels)):
+        for j, (label, (x, y)) in enumerate(panel["lines"].items()):
+            closed_form = label.startswith("paper")
+            ax.plot(x, y, "--" if closed_form else "-", lw=2.4 if not closed_form else 1.2, color=f"C{j}", label=label,
+                    zorder=2 if closed_form else 1)
+            data[f"{k}:{label}"] = np.stack([np.asarray(x), np.asarray(y)])
+        ax.set_title(panel["title"], fontsize=9)
+        ax.set_xlabel(panel["xlabel"])
+        ax.set_ylabel(panel["ylabel"])
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    if title:
+        fig.suptitle(title)
+    return _finish(fig, path, data)

@@ -541,6 +541,48 @@ def calibrate(
         raise typer.Exit(EXIT_UNTRUSTED)
 
 
+def _steps() -> tuple[str, ...]:
+    from ..paper.reproduce import STEP_NAMES
+
+    return STEP_NAMES
+
+
+@app.command()
+@_guarded
+def reproduce(
+    quick: bool = typer.Option(False, "--quick", help="coarse grids and fewer variants (minutes instead of about half an hour)"),
+    out: Path = typer.Option(Path("out/reproduce"), help="output folder: report.md (verdicts and figures), findings.csv, every "
+                             "figure and its data; findings/ keeps each finished step (a rerun resumes)"),
+    only: Optional[str] = typer.Option(None, help="comma-separated steps to run (default all): " + ", ".join(_steps())),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """Reproduce the paper: every figure (3-17) into one folder and a report that sets each value the
+    paper reports beside jaxrock's, with the difference and a verdict (reproduced / differs,
+    explained / not reproduced) and the computed reason where it differs."""
+    from .._validate import JaxrockInputError, check_writable
+
+    names = None
+    if only is not None:
+        names = [n.strip() for n in only.split(",") if n.strip()]
+        bad = [n for n in names if n not in _steps()]
+        if not names or bad:
+            raise JaxrockInputError(f"--only {only!r}: {', '.join(bad) or 'no step'}; valid: comma-separated {', '.join(_steps())}")
+    check_writable("--out", out / "report.md")
+    _hold(out, "--out")
+    from ..interrupt import Interrupted
+    from ..paper.reproduce import reproduce as run
+
+    try:
+        rep = run(out, quick=quick, only=names, progress=not quiet)
+    except Interrupted:
+        typer.echo(f"interrupted: the finished steps are kept in {out / 'findings'}; resume with: {_resume_command()}", err=True)
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    counts = rep.counts()
+    typer.echo(f"{sum(counts.values())} values of the paper in {sum(rep.seconds.values()):.0f} s of computation: "
+               + ", ".join(f"{n} {v}" for v, n in counts.items()))
+    typer.echo("wrote " + ", ".join(str(p) for p in rep.files.values()))
+
+
 def main():  # pragma: no cover
     app()
 
