@@ -63,21 +63,24 @@ def fig11_12(out: Path, *, n: int = 24, heights=(10, 30, 50, 100), n_elements: i
     tall = max(heights)
     s03 = overturning_spectrum(_concrete(Block.from_slenderness(tall, 0.3), n_elements), w, a, progress=False)
     r03 = overturning_spectrum(SpringModel(Block.from_slenderness(tall, 0.3)), w, a, progress=False)
-    ok_all = all(s.ok for s in spectra.values()) and s03.ok and r03.ok
+    failed = sum(int((s.status != 0).sum()) for s in (*spectra.values(), s03, r03))
     findings = []
 
-    differ = {ta: max(float(np.mean(spectra[ta, h].overturned != spectra[ta, "rigid"].overturned)) for h in heights) for ta in (0.2,)}
-    differ[0.3] = float(np.mean(s03.overturned != r03.overturned))
-    ok = max(differ.values()) <= AGREE_CELLS and ok_all
+    def differ_share(s, r):  # a failed cell (either model) counts as another verdict
+        return float(np.mean((s.overturned != r.overturned) | (s.status != 0) | (r.status != 0)))
+
+    differ = {0.2: max(differ_share(spectra[0.2, h], spectra[0.2, "rigid"]) for h in heights), 0.3: differ_share(s03, r03)}
+    ok = max(differ.values()) <= AGREE_CELLS
     findings.append(Finding(
         "11, 12", "flexibility against the quasi-rigid column for squat columns", "flexibility immaterial for tanα > 0.2",
         f"cells with another overturning verdict: tanα 0.2 ≤ {100 * differ[0.2]:.1f} % (2h ≤ {tall:g} m); "
-        f"tanα 0.3, 2h = {tall:g} m: {100 * differ[0.3]:.1f} %", "", f"≤ {100 * AGREE_CELLS:g} % of the cells, every cell ok",
+        f"tanα 0.3, 2h = {tall:g} m: {100 * differ[0.3]:.1f} %; {failed} failed cells in all", "",
+        f"≤ {100 * AGREE_CELLS:g} % of the cells (a failed cell counts as another verdict)",
         judged(ok), "" if ok else "flexibility changes the verdict in more cells"))
 
     least_up = {h: float(np.nanmin(spectra[0.1, h].uplift_boundary)) for h in heights}
     below = [h for h in heights if least_up[h] < 1.0]
-    ok = len(below) > 0 and ok_all
+    ok = len(below) > 0
     findings.append(Finding(
         "11, 12", "least uplift a_p/(g tanα) of the concrete columns, tanα = 0.1", "flexible columns uplift below g tanα",
         ", ".join(f"2h {h:g} m: {least_up[h]:.2f}" for h in heights) + f" (grid starts at {a[0]:g})", "",
@@ -89,7 +92,7 @@ def fig11_12(out: Path, *, n: int = 24, heights=(10, 30, 50, 100), n_elements: i
     for h in heights:
         d = spectra[0.1, h].overturn_boundary - rigid_line  # > 0: the flexible column needs more to overturn
         shifts[h] = (float(np.nanmean(d[lo])), float(np.nanmean(d[hi])))
-    ok = shifts[tall][0] < 0 < shifts[tall][1] and ok_all
+    ok = shifts[tall][0] < 0 < shifts[tall][1]
     findings.append(Finding(
         "11, 12", f"overturning line of the concrete columns against the quasi-rigid one, tanα = 0.1 (split at ω_p/p = {STABILITY_SPLIT:g})",
         f"less stable than rigid for ω_p/p < {STABILITY_SPLIT:g}, more stable above",

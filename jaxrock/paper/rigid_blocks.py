@@ -106,21 +106,23 @@ def fig06_09(out: Path, *, n: int = 32) -> list[Finding]:
                 rm = s if rm is None else rm
                 spectra.append(s)
                 titles.append(f"{name}, tanα = {ta}")
-                if name != "RM":
-                    disagree[fig, ta, name] = (float(np.mean(s.overturned != rm.overturned)),
-                                               float(np.median(np.abs(s.max_theta - rm.max_theta))), s.ok)
+                if name != "RM":  # a failed cell (either model) counts as a disagreement
+                    failed = (s.status != 0) | (rm.status != 0)
+                    disagree[fig, ta, name] = (float(np.mean((s.overturned != rm.overturned) | failed)),
+                                               float(np.median(np.abs(s.max_theta - rm.max_theta))), int(failed.sum()))
         plt.close(plot_spectra_grid(spectra, titles, ncols=3, path=out / f"fig{fig:02d}_spectra.png",
                                     suptitle=f"figure {fig}: {'damped' if damped else 'undamped'} rigid blocks, symmetric Ricker pulse"))
     findings = []
     for fig in (6, 9):
         worst = max(v[0] for k, v in disagree.items() if k[0] == fig)
-        ok = worst <= AGREE_CELLS and all(v[2] for k, v in disagree.items() if k[0] == fig)
+        ok = worst <= AGREE_CELLS
         text = "; ".join(f"{name} tanα {ta}: {100 * disagree[fig, ta, name][0]:.1f} % cells, median |Δθ/α| "
-                         f"{disagree[fig, ta, name][1]:.3f}" for ta in TAN_ALPHAS for name in ("SM", "SM + ΔI"))
+                         f"{disagree[fig, ta, name][1]:.3f}" + (f", {disagree[fig, ta, name][2]} failed" if disagree[fig, ta, name][2] else "")
+                         for ta in TAN_ALPHAS for name in ("SM", "SM + ΔI"))
         findings.append(Finding(
             f"{fig}", f"spectra ({'damped' if fig == 9 else 'undamped'}, {n}×{n}): RM, SM without and with added masses",
             "the three agree", text, "", f"each SM spectrum gives another overturning verdict than the RM's in ≤ "
-            f"{100 * AGREE_CELLS:g} % of the cells, every cell ok", judged(ok),
+            f"{100 * AGREE_CELLS:g} % of the cells (a failed cell counts as another verdict)", judged(ok),
             "" if ok else f"up to {100 * worst:.1f} % of the cells differ"))
     return findings
 
