@@ -92,7 +92,8 @@ def _kept(path: Path, mode: str) -> tuple[list[Finding], float] | None:
 
 
 def reproduce(out="out/reproduce", *, quick: bool = False, only=None, progress: bool = True) -> Report:
-    """Run the steps (`only`: names of `STEPS`, default all) into `out` and write the report."""
+    """Run the steps (`only`: names of `STEPS`, default all) into `out` and write the report, which
+    also shows the steps kept in `out` by earlier runs of the same mode."""
     from tqdm.auto import tqdm
 
     from ..interrupt import stop_point
@@ -119,6 +120,11 @@ def reproduce(out="out/reproduce", *, quick: bool = False, only=None, progress: 
                 kept = fs, secs
                 stop_point()  # a signal stops the run here, with this step kept
             findings[step.name], seconds[step.name] = kept
+    for step in STEPS:  # steps kept in the folder from earlier runs of the same mode join the report
+        if step.name not in findings and (kept := _kept(out / "findings" / f"{step.name}.json", mode)) is not None:
+            findings[step.name], seconds[step.name] = kept
+    order = {s.name: i for i, s in enumerate(STEPS)}
+    findings = dict(sorted(findings.items(), key=lambda kv: order[kv[0]]))
     report = Report(findings, seconds, quick, {})
     report.files = write_report(report, out)
     return report
