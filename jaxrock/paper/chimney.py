@@ -59,8 +59,8 @@ def run(record, fields=("theta", "w_top", "base_moment", "section_moment"), **kw
 def peaks(sols, moment="base_moment", **kw) -> dict:
     """The peak moments [kNm] of a variant's runs, their ratio, the rotation and T₁ [s]."""
     m = {k: float(np.max(np.abs(np.asarray(s.history[moment])))) / 1e3 for k, s in sols.items()}
-    return {**m, "T1": float(chimney(fixed_base=True, **kw).first_period()), "ratio": m["rocking"] / m["fixed"], "rotation": float(sols["rocking"].max_theta),
-            "ok": all(status_names(s.status) == "ok" for s in sols.values())}
+    return {**m, "T1": float(chimney(fixed_base=True, **kw).first_period()), "ratio": m["rocking"] / m["fixed"],
+            "rotation": float(sols["rocking"].max_theta), "ok": all(status_names(s.status) == "ok" for s in sols.values())}
 
 
 VARIANTS = {  # name → (record, model options, moment measured)

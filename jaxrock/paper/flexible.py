@@ -22,7 +22,7 @@ from ..results import Save, status_names
 from ..rigid import RigidModel
 from ..spring import Column, SpringModel, first_period_eq21
 from ..analyses.spectra import overturning_spectrum
-from .findings import EXPLAINED, Finding, judged, value_finding
+from .findings import Finding, judged, value_finding
 
 AGREE_CELLS = 0.05  # "immaterial": at most 5 % of the cells with another overturning verdict
 STABILITY_SPLIT = 4.5  # ω_p/p where the paper's flexible columns turn from less to more stable
@@ -138,7 +138,7 @@ def fig13(out: Path, *, n_elements: int = 10, quick: bool = False) -> list[Findi
     # question 1: how far is (6, 5.85) from each model's overturning boundary along ω_p/p = 6?
     accel = np.arange(4.0, 12.0 + 1e-9, 0.5 if quick else 0.25)
     refine = 4 if quick else 6
-    variants = {name: m for name, m in models.items()}
+    variants = dict(models)
     if not quick:
         variants.update({
             "RM, η = 1 (no impact loss)": RigidModel(block, eta=1.0),
@@ -169,7 +169,7 @@ def fig13(out: Path, *, n_elements: int = 10, quick: bool = False) -> list[Findi
                    + "The pulse lies close to the rigid boundary, where a few per cent in a_p change the verdict "
                    "(all boundaries: fig13_boundaries.md)")
     findings.append(Finding("13", "pulse (ω_p/p, a_p/(g tanα)) = (6, 5.85)", "the flexible column survives, the rigid one overturns",
-                            text[6.0], "", "flexible SM survives; RM overturns", EXPLAINED if not ok else judged(ok),
+                            text[6.0], "", "flexible SM survives; RM overturns", judged(ok, explanation),
                             "" if ok else explanation))
     findings.append(Finding("13", "least overturning a_p/(g tanα) at ω_p/p = 6 (the rigid boundary beside the pulse)", "≤ 5.85 (rigid overturns)",
                             "; ".join(rows), "", "rigid boundary ≤ 5.85", judged(rigid_lo <= 5.85, explanation),

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import inspect
 import json
 import time
 from dataclasses import dataclass, field
@@ -66,7 +67,7 @@ def run_step(step: Step, out: Path, quick: bool, **overrides) -> list[Finding]:
     module, function = step.function.split(":")
     fn = getattr(importlib.import_module(f"jaxrock.paper.{module}"), function)
     kwargs = {**(step.quick if quick else step.full), **overrides}
-    return fn(out, **kwargs) if "out" in fn.__code__.co_varnames[:1] else fn(**kwargs)
+    return fn(out, **kwargs) if "out" in inspect.signature(fn).parameters else fn(**kwargs)  # fig02, eq21 write no file
 
 
 @dataclass
@@ -102,15 +103,15 @@ def reproduce(out="out/reproduce", *, quick: bool = False, only=None, progress: 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "findings").mkdir(exist_ok=True)
-    steps = [s for s in STEPS if only is None or s.name in only]
+    selected = [s.name for s in STEPS if only is None or s.name in only]
     mode = "quick" if quick else "full"
     findings, seconds = {}, {}
-    with tqdm(steps, desc="reproduce", unit="step", disable=not progress) as bar:
-        for step in bar:
-            bar.set_postfix_str(step.name)
+    with tqdm(total=len(selected), desc="reproduce", unit="step", disable=not progress) as bar:
+        for step in STEPS:  # a step not selected joins the report where an earlier run of the same mode kept it
             kept_path = out / "findings" / f"{step.name}.json"
             kept = _kept(kept_path, mode)
-            if kept is None:
+            if kept is None and step.name in selected:
+                bar.set_postfix_str(step.name)
                 t0 = time.perf_counter()
                 fs = run_step(step, out, quick)
                 secs = time.perf_counter() - t0
@@ -119,12 +120,9 @@ def reproduce(out="out/reproduce", *, quick: bool = False, only=None, progress: 
                 write_atomically(kept_path, lambda tmp, text=text: Path(tmp).write_text(text, encoding="utf-8"))
                 kept = fs, secs
                 stop_point()  # a signal stops the run here, with this step kept
-            findings[step.name], seconds[step.name] = kept
-    for step in STEPS:  # steps kept in the folder from earlier runs of the same mode join the report
-        if step.name not in findings and (kept := _kept(out / "findings" / f"{step.name}.json", mode)) is not None:
-            findings[step.name], seconds[step.name] = kept
-    order = {s.name: i for i, s in enumerate(STEPS)}
-    findings = dict(sorted(findings.items(), key=lambda kv: order[kv[0]]))
+            if kept is not None:
+                findings[step.name], seconds[step.name] = kept
+            bar.update(step.name in selected)
     report = Report(findings, seconds, quick, {})
     report.files = write_report(report, out)
     return report
