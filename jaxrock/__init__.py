@@ -37,7 +37,7 @@ _EXPORTS = {
                     "model"),
     **dict.fromkeys(["ModelKind", "register_model_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"], "scene"),
     **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
-    **dict.fromkeys(["SpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "AbstractBackbone", "Bilinear",
+    **dict.fromkeys(["SpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear",
                      "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
     **dict.fromkeys(["el_centro", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",

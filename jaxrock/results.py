@@ -24,12 +24,14 @@ from .outputs import OUTPUTS, RESULT_COLUMNS, SUMMARY, Output, summary_doc  # th
 class Status(eqx.Enumeration):
     """How a run ended. Anything but `ok` means the numbers are not to be trusted."""
 
-    ok = "the run finished; the summary is exact to the solver tolerance"
+    ok = ("the run finished within its integrator's tolerance: with `Checked` (the flexible SM's default), its estimated global "
+          "error of max |theta|/alpha' is within the stated accuracy; otherwise every step met the local tolerance")
     max_iterations = "the bound on loop iterations (segments and step chunks) was hit before the answer was fixed"
     max_steps = "an integration segment hit its step bound (stiff, or too tight a tolerance)"
     solver_failed = "the integrator or a root find failed (step size underflow, divergence, NaN)"
     missed_impact = "an impact surface was crossed without its event firing (report this as a bug)"
     invalid_input = "a parameter is outside its valid range (given under jax.vmap/jit, where constructors cannot refuse it); the numbers are NaN"
+    inaccurate = "the run finished, but its global error estimate (`Checked`: a companion run at a looser tolerance) exceeds the stated accuracy, or the companion failed"
 
 
 STATUS_NAMES: tuple[str, ...] = tuple(Status._name_to_item)  # index = the item's integer value

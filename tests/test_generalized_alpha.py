@@ -447,8 +447,10 @@ def test_flexible_extremes(name):
     """Flexible column (4 elements) at GA 1e-7 on stiff and extreme scenes: status ok, finite, and
     within 1e-3 of the reference (measured ≤ 2.3e-4). At E = 1e14 Pa the reference is the one-DOF
     quasi-rigid SM (Kvaerno5 1e-7 stalls there: max_steps after 15 s); otherwise Kvaerno5 1e-7.
-    The flexible default GA 1e-5 also runs them all with status ok, but is 3.1e-2 off on the
-    stiffest one (E = 1e14 with θs = 1e-6 α: 0.6303 vs 0.6612)."""
+    The flexible default, `Checked(GA 1e-5)`, must be honest: `ok` only within its accuracy
+    (1e-2) of the reference; on the two pulse scenes at E = 1e14 GA 1e-5 is 2.8e-2 (θs = 1e-4 α:
+    0.6347 vs 0.6630) and 3.2e-3 (θs = 1e-6 α) off with every step within tolerance, and the
+    companion at 1e-4 (0.488, 0.537) makes both `inaccurate`."""
     h2, ta, E, sm, ar, wp = FLEX_EXTREMES[name]
     blk = Block.from_slenderness(h2, ta)
     ex = qr_pulse(ar, wp, blk)
@@ -456,8 +458,8 @@ def test_flexible_extremes(name):
     s = simulate(model, ex, integrator=GA7)
     assert is_ok(s), status(s)
     assert np.isfinite(float(s.max_theta)) and 0.0 <= float(s.max_theta) <= 1.0
-    d = simulate(model, ex)  # the default GA: runs, ok
-    assert is_ok(d) and np.isfinite(float(d.max_theta)) and bool(d.overturned) == bool(s.overturned)
+    d = simulate(model, ex)  # the default, Checked(GA 1e-5): finite; ok only where within accuracy
+    assert np.isfinite(float(d.max_theta)) and status(d) in ("ok", "inaccurate"), status(d)
     if E > 1e13:
         ref = simulate(SpringModel(blk, smoothing=sm), ex, integrator=TSIT5)
     else:
@@ -467,6 +469,10 @@ def test_flexible_extremes(name):
     assert float(s.max_theta) == pytest.approx(float(ref.max_theta), abs=1e-3)
     if bool(ref.overturned):
         assert bool(simulate(jaxrock.RigidModel(blk), ex).overturned)
+    accuracy = model.default_integrator().accuracy
+    if is_ok(d):
+        assert abs(float(d.max_theta) - float(ref.max_theta)) <= accuracy
+    assert is_ok(d) == (E < 1e13 or ar > 10), status(d)  # the stiff pulse scenes are flagged, no other
 
 
 def test_flexible_below_uplift_is_quasi_static():

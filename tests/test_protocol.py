@@ -218,7 +218,7 @@ def test_run_scenes_runs_the_registered_newcomer(tmp_path, oscillator_kind):
 
 @pytest.mark.parametrize("model, integrator, needs", [
     (jr.RigidModel(BLOCK), jr.GeneralizedAlpha(), "RigidModel needs an EventIntegrator"),
-    (jr.SpringModel(BLOCK), jr.EventIntegrator(), "SpringModel needs a SpringIntegrator or GeneralizedAlpha"),
+    (jr.SpringModel(BLOCK), jr.EventIntegrator(), "SpringModel needs a SpringIntegrator, GeneralizedAlpha or Checked"),
     (OSC, jr.EventIntegrator(), "the oscillator needs RK4"),
 ])
 def test_a_model_refuses_an_integrator_it_cannot_run(model, integrator, needs):

@@ -11,6 +11,7 @@ from scipy.integrate import cumulative_trapezoid
 import jaxrock as jr
 from jaxrock.analyses import fragility
 from jaxrock import G
+from jaxrock.results import STATUS_NAMES
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason=f"shared data folder {SHARED} is absent")
@@ -185,14 +186,18 @@ def test_fragility_edge_cases():
 def test_three_models_on_one_suite_agree():
     """The RM, the quasi-rigid SM and the flexible SM on the same suite (El Centro, 2h = 4 m,
     tanα = 0.2): none uplifts below the closed-form threshold (factor × PGA ≤ g tanα: 0.639 for
-    El Centro); every run ends ok; the least overturning factors agree within 10 % (1.57, 1.54 and
-    1.52 at refine 5, issue 27's closing note), and the fits share the records' measures."""
+    El Centro); every run of the RM and the quasi-rigid SM ends ok; the flexible SM's ok or
+    `inaccurate` (issue 29: at factors 1 and 1.5 its peak is ill-conditioned — generalized-α at
+    1e-6…1e-9 gives 0.340, 0.451, 0.416, 0.317 at factor 1 — and its default says so); the least
+    overturning factors agree within 10 % (1.57, 1.54 and 1.52 at refine 5, issue 27's closing
+    note), and the fits share the records' measures."""
     from jaxrock.analyses.suite import run_suite
 
     scale = np.array([0.25, 0.5, 1.0, 1.25, 1.5, 1.75, 2.0])
     ds = run_suite(("rigid", "spring", "spring-flexible"), [jr.el_centro()], scale=scale, height=4.0, tan_alpha=0.2, refine=3,
                    im="pga", n_boot=20, progress=False)
-    assert (ds.worst_status == 0).all()
+    assert (ds.worst_status.sel(model=["rigid", "spring"]) == 0).all()
+    assert ds.worst_status.sel(model="spring-flexible").isin([0, STATUS_NAMES.index("inaccurate")]).all()
     threshold = G * 0.2 / float(ds.pga[0])
     assert threshold == pytest.approx(0.639, abs=1e-3)
     assert not ds.uplifted.sel(model="rigid").values[..., scale < threshold].any()

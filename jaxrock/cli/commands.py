@@ -55,8 +55,8 @@ def spectrum(
                                    "of sizes the compiled passes share"),
     refine: int = typer.Option(10, min=0, max=40, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
     tol: Optional[float] = typer.Option(
-        None, help="spring models: run generalized-α at this local tolerance in (0, 1) (e.g. 1e-6: a quasi-rigid pulse grid ~15x "
-        "faster, max error ~1e-2 in θ/α; see README); default: the model's default integrator"),
+        None, help="spring models: run generalized-α at this local tolerance in (0, 0.1), its global error checked by a run at 10x "
+        "the tolerance (status inaccurate beyond 1e-2 in θ/α; see README); default: the model's default integrator"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),
 ):

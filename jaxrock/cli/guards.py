@@ -64,6 +64,7 @@ STATUS_ADVICE = {
     "(loosen --tol, or raise max_steps of the integrator in Python)",
     "solver_failed": "the integrator failed (step underflow, divergence or NaN): loosen --tol or report the scene",
     "missed_impact": "an impact was crossed without its event: report the command line as a bug",
+    "inaccurate": "the estimated error exceeds the stated accuracy (a stiff spring or column): tighten --tol, or raise the smoothing",
     "invalid_input": "a parameter was outside its valid range: report the command line as a bug (the CLI checks its input)",
 }
 

@@ -98,15 +98,16 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
 
 
 def _integrator(model: ModelKind, tol: Optional[float]):
-    """`--tol`: generalized-α at that local tolerance for the spring models; None: the default."""
+    """`--tol`: generalized-α at that local tolerance for the spring models, its global error
+    checked (`Checked`: status `inaccurate` beyond 1e-2 in max θ/α); None: the default."""
     if tol is None:
         return None
     from .._validate import JaxrockInputError
-    from ..spring import GeneralizedAlpha
+    from ..spring import Checked, GeneralizedAlpha
 
     if model == ModelKind.rigid:
         raise JaxrockInputError("--tol selects the spring model's generalized-α integrator; the rigid model takes none")
-    return GeneralizedAlpha(rtol=tol, atol=tol)
+    return Checked(GeneralizedAlpha(rtol=tol, atol=tol))
 
 
 def _grid_line(o, values) -> str:

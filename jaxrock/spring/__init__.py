@@ -51,12 +51,14 @@ The package, one module per concept:
 - `base_spring`: the base spring's backbones (`Bilinear`, `Tanh`) and the damper (eq. 18);
 - `system`: the assembled system of one scene (`SpringSystem`, `assemble`);
 - `model`: the model value (`SpringModel`) and its scenes-file kinds;
-- `diffrax_integrator`, `generalized_alpha`: the integrators, each a `SpringSystem` → an
+- `diffrax_integrator`, `generalized_alpha`: the integrators, and `checked` (`Checked`: a
+  companion run estimates the global error, and the status says whether it is within accuracy), each a `SpringSystem` → an
   `AbstractStepper` (`jaxrock.model`), the run recorded by `jaxrock.bookkeeping`.
 """
 
 from .base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, Bilinear, Tanh, as_backbone, damper
 from .column import Column, cbar_eq17, first_period_eq21, pushover_eq9
+from .checked import Checked, CheckedStepper
 from .diffrax_integrator import DiffraxSpringStepper, SpringIntegrator
 from .generalized_alpha import GeneralizedAlpha, GeneralizedAlphaStepper
 from .model import SpringModel
@@ -67,6 +69,8 @@ __all__ = [
     "SpringSystem",
     "SpringIntegrator",
     "GeneralizedAlpha",
+    "Checked",
+    "CheckedStepper",
     "DiffraxSpringStepper",
     "GeneralizedAlphaStepper",
     "Column",

@@ -24,6 +24,7 @@ from . import beam
 from .base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, as_backbone
 from .column import Column, cbar_eq17, pushover_eq9
 from .diffrax_integrator import SpringIntegrator
+from .checked import Checked
 from .generalized_alpha import GeneralizedAlpha
 from .system import ENERGY_FIELDS, HISTORY_FIELDS, SpringSystem, assemble
 
@@ -99,21 +100,25 @@ class SpringModel(AbstractModel):
                 Limit("cbar (damper coefficient)", self.cbar, 0.0, math.inf, hi_open=True), *column)
 
     # -- AbstractModel --------------------------------------------------------------------------
-    def default_integrator(self) -> "SpringIntegrator | GeneralizedAlpha":
-        """The work–precision choice (`benchmarks/bench_spring.py`; its measured errors and costs,
-        and the alternatives, are in the README, "Numerics and performance"):
+    def default_integrator(self) -> "SpringIntegrator | Checked":
+        """The work–precision choice (`jaxrock work-precision`, `benchmarks/bench_spring.py`; the
+        measured errors and costs, and the alternatives, are in the README, "Numerics and
+        performance"):
 
         - quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10, reverse-mode differentiable (which
           the calibration of c̄ needs). `GeneralizedAlpha(1e-6, 1e-6)` is cheaper (0.17 against
           0.24 ms/scene on the benchmark's grid) at ~1e-3 error in θ/α: for pulse spectra where that suffices, not for records, whose response
           hangs on resolving the block's ringing on the stiff pre-yield spring before uplift;
-        - flexible → `GeneralizedAlpha(1e-5, 1e-5)`, ρ∞ = 0.9 (forward-mode differentiable; for
-          `jax.grad` through a flexible column, `SpringIntegrator()`, Kvaerno5 + Newton)."""
+        - flexible → `Checked(GeneralizedAlpha(1e-5, 1e-5))`, ρ∞ = 0.9, accuracy 1e-2 in max θ/α′:
+          its status is `inaccurate` where a companion run at 1e-4 differs by more (a stiff spring
+          or column, where the local tolerance does not bound the global error: `jaxrock.spring.
+          checked`); about twice an unchecked run's cost. Forward-mode differentiable; for
+          `jax.grad` through a flexible column, `SpringIntegrator()`, Kvaerno5 + Newton."""
         if self.column is None:
             # 20,000 steps (the class default) ended the 40-s records of ../shared/data/records
             # (dt 0.005 s) in max_steps at every factor, the block at rest on its ringing spring
             return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000)
-        return GeneralizedAlpha(rtol=1e-5, atol=1e-5)
+        return Checked(GeneralizedAlpha(rtol=1e-5, atol=1e-5))
 
     @property
     def history_fields(self) -> tuple[str, ...]:
@@ -210,7 +215,7 @@ class SpringModel(AbstractModel):
         """The run as an `AbstractStepper` of `integrator` (an `AbstractSpringIntegrator`), on the
         system assembled here once (energy integrals tracked when `save` asks for energies)."""
         if not isinstance(integrator, AbstractSpringIntegrator):
-            raise JaxrockInputError(f"SpringModel needs a SpringIntegrator or GeneralizedAlpha, got {type(integrator).__name__}")
+            raise JaxrockInputError(f"SpringModel needs a SpringIntegrator, GeneralizedAlpha or Checked, got {type(integrator).__name__}")
         fields = () if save is None else save.fields
         system = self.system(track_energy=any(f in ENERGY_FIELDS for f in fields))
         return integrator.stepper(self, system, save, t1)
