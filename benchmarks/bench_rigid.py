@@ -10,7 +10,7 @@ linspace(1, 15, grid), a_p/(g tanα) ∈ linspace(0.5, 10, grid).
   as first call minus second call).
 - Reference: jaxrock at rtol 1e-13 (Dopri8) on the full grid; cross-checked against SciPy DOP853
   at rtol 1e-12 on the random subset of `--n` cells.
-- SciPy (tests/scipy_rigid.py) is run on the subset only (time per scene is what is compared),
+- SciPy (jaxrock/numerics/scipy_rigid.py) is run on the subset only (time per scene is what is compared),
   DOP853 and RK45 at several rtol (LSODA's event location fails on these scenes: its dense output
   gives no sign change to brentq); the fastest reaching max error ≤ 1e-6 is the "tuned" peer.
 - Cost against difficulty: the grid's cells in classes by their number of impacts, each class run
@@ -28,21 +28,19 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
 
 import diffrax  # noqa: E402
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 import jaxrock as jr  # noqa: E402
-import scipy_rigid as sr  # noqa: E402
+from jaxrock.numerics import scipy_rigid as sr  # noqa: E402
 
 G = 9.81
 TARGET_ERR = 1e-6

@@ -1,4 +1,4 @@
-"""Spring-model (SM) benchmark: jaxrock vs the paper's own SM in OpenSeesPy (benchmarks/opensees_sm.py).
+"""Spring-model (SM) benchmark: jaxrock vs the paper's own SM in OpenSeesPy (jaxrock/numerics/opensees_sm.py).
 
     python benchmarks/bench_spring.py [--quick] [--grid 32] [--flex-grid 8] [--n-opensees 32] [--n-opensees-flex 16]
 
@@ -29,14 +29,12 @@ import argparse
 import math
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
@@ -44,7 +42,7 @@ import jax.numpy as jnp  # noqa: E402
 import jaxrock as jr  # noqa: E402
 from jaxrock.spring import Column, GeneralizedAlpha, SpringIntegrator, SpringModel  # noqa: E402
 
-import opensees_sm as osm  # noqa: E402
+from jaxrock.numerics import opensees_sm as osm  # noqa: E402
 
 G = 9.81
 LINES: list[str] = []
@@ -151,7 +149,7 @@ def main() -> None:
     if args.quick:
         args.grid, args.flex_grid, args.n_opensees, args.n_opensees_flex = 4, 2, 3, 2
     rng = np.random.default_rng(args.seed)
-    out("# bench_spring: jaxrock SpringModel vs OpenSeesPy SM (benchmarks/opensees_sm.py)")
+    out("# bench_spring: jaxrock SpringModel vs OpenSeesPy SM (jaxrock/numerics/opensees_sm.py)")
     out(f"# machine: {platform.machine()} {jax.device_count()} {jax.devices()[0].platform} device(s), "
         f"{os.cpu_count()} cores, jax {jax.__version__}, python {platform.python_version()}")
     # quasi-rigid

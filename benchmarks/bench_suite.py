@@ -1,5 +1,5 @@
 """Record suite, rigid model: jaxrock's least overturning factors (a vmapped sweep, then vmapped
-bisection) against the same search with the SciPy event loop (`tests/scipy_rigid.py`: DOP853 with
+bisection) against the same search with the SciPy event loop (`jaxrock/numerics/scipy_rigid.py`: DOP853 with
 impact, apex and overturning events, stepping on every record sample), run by run as its users
 would script it.
 
@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
@@ -27,10 +26,9 @@ os.environ.setdefault("JAXROCK_CACHE_DIR", "off")  # the first call's compilatio
 import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
 
 import jaxrock as jr  # noqa: E402
-import scipy_rigid as sr  # noqa: E402
+from jaxrock.numerics import scipy_rigid as sr  # noqa: E402
 
 SHARED = HERE.parent.parent / "shared" / "data" / "records"
 LINES: list[str] = []

@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1] / "jaxrock"
 
 # layer of each module (dotted name below jaxrock), highest first; a package's modules share its layer
 LAYERS = [
-    ("front ends", ("cli", "paper", "reports", "plotting")),
+    ("front ends", ("cli", "paper", "numerics", "reports", "plotting")),
     ("analyses", ("analyses",)),
     ("input/output", ("io",)),
     ("models", ("rigid", "spring")),

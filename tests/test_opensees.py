@@ -1,19 +1,16 @@
-"""The OpenSeesPy SM peer (benchmarks/opensees_sm.py): eq. 21, eq. 9, and one pulse scene vs jaxrock.
+"""The OpenSeesPy SM peer (jaxrock/numerics/opensees_sm.py): eq. 21, eq. 9, and one pulse scene vs jaxrock.
 
 Skipped when openseespy is not installed (`pip install openseespy`; Debian: libblas3 liblapack3).
 """
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 pytest.importorskip("openseespy")
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
-import opensees_sm as osm  # noqa: E402
+from jaxrock.numerics import opensees_sm as osm  # noqa: E402
 
 
 def test_fixed_base_period_eq21():

@@ -1,5 +1,5 @@
 """Physics of the rigid rocking model (RM): uplift, impact, free rocking, symmetry, Zeno, extended
-base, vmap, gradients, and agreement with an independent SciPy event loop (tests/scipy_rigid.py).
+base, vmap, gradients, and agreement with an independent SciPy event loop (jaxrock/numerics/scipy_rigid.py).
 
 Compiling `simulate` takes seconds, so every compiled function is built once per module (fixtures)
 and reused across scenes; the integrator is passed as an argument (its tolerances are traced).
@@ -22,7 +22,7 @@ import jaxrock as jr
 from helpers import spec_extended
 from jaxrock import JaxrockInputError
 
-import scipy_rigid as sr
+from jaxrock.numerics import scipy_rigid as sr
 
 G = 9.81
 DEFAULT = jr.EventIntegrator()

@@ -583,6 +583,41 @@ def reproduce(
     typer.echo("wrote " + ", ".join(str(p) for p in rep.files.values()))
 
 
+@app.command()
+@_guarded
+def stability(
+    quick: bool = typer.Option(False, "--quick", help="the quick matrix: fewer cases, flexible columns of 4 elements (about 1 min)"),
+    out: Path = typer.Option(Path("out/stability"), help="output folder: stability.md, stability.csv, stability.png; "
+                             "stability_cases/ keeps each finished case (a rerun resumes)"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """The defaults of the three models (rigid, quasi-rigid SM, flexible SM) on stiff and extreme
+    scenes, each against a refined reference: finite or not, status, error, stated accuracy, run
+    time, verdict (holds / flagged / ok but off / not finite). Exit 1 where a status lies (ok but
+    off) or a summary is not finite."""
+    from .._validate import check_writable
+
+    check_writable("--out", out / "stability.md")
+    _hold(out, "--out")
+    from ..interrupt import Interrupted
+    from ..numerics.stability import NOT_FINITE, OFF, VERDICTS
+    from ..numerics.stability import stability as run
+
+    try:
+        rows = run(out, quick=quick, progress=not quiet)
+    except Interrupted:
+        typer.echo(f"interrupted: the finished cases are kept in {out / 'stability_cases'}; resume with: {_resume_command()}", err=True)
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
+    typer.echo(f"{len(rows)} runs: " + ", ".join(f"{n} {v}" for v, n in counts.items()))
+    for r in rows:
+        if r["verdict"] not in ("holds",):
+            typer.echo(f"  {r['case']} | {r['model']}: {r['verdict']} ({r['status']}, error {r['error']:.1e}, accuracy {r['accuracy']:.0e})")
+    typer.echo(f"wrote {out / 'stability.md'}, {out / 'stability.csv'}, {out / 'stability.png'}")
+    if counts[OFF] or counts[NOT_FINITE]:
+        raise typer.Exit(EXIT_UNTRUSTED)
+
+
 def main():  # pragma: no cover
     app()
 
