@@ -618,6 +618,38 @@ def stability(
         raise typer.Exit(EXIT_UNTRUSTED)
 
 
+@app.command("work-precision")
+@_guarded
+def work_precision(
+    quick: bool = typer.Option(False, "--quick", help="fewer settings and smaller grids (about 3 min on 2 cores)"),
+    out: Path = typer.Option(Path("out/work-precision"), help="output folder: work_precision.png (the diagrams), .md (tables, the "
+                             "defaults against the peers), .csv (every point); work_precision_panels/ keeps each finished panel"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+):
+    """Error against run time for the RM (diffrax solvers over rtol, float32, the SciPy event loop)
+    and the SM (Tsit5 and generalized-α over the tolerance, Checked, the spring's smoothing and
+    backbone, the number of elements, OpenSeesPy when the `opensees` extra is installed), per scene
+    and per vmapped grid, against converged references, the defaults marked."""
+    from .._validate import check_writable
+
+    check_writable("--out", out / "work_precision.md")
+    _hold(out, "--out")
+    from ..interrupt import Interrupted
+    from ..numerics.work_precision import defaults_table
+    from ..numerics.work_precision import work_precision as run
+
+    try:
+        rows = run(out, quick=quick, progress=not quiet)
+    except Interrupted:
+        typer.echo(f"interrupted: the finished panels are kept in {out / 'work_precision_panels'}; resume with: {_resume_command()}",
+                   err=True)
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    typer.echo(f"{len(rows)} points; the defaults against the peers:")
+    for line in defaults_table(rows):
+        typer.echo(line)
+    typer.echo(f"wrote {out / 'work_precision.png'}, {out / 'work_precision.md'}, {out / 'work_precision.csv'}")
+
+
 def main():  # pragma: no cover
     app()
 
