@@ -547,6 +547,22 @@ def _steps() -> tuple[str, ...]:
     return STEP_NAMES
 
 
+def _in_folder(out: Path, first_file: str, parts: str, kept: str, run):
+    """The frame of the commands that fill a folder and resume (reproduce, stability,
+    work-precision): `--out` checked writable and held, then `run()`; a signal exits 130 naming
+    where the finished `parts` are kept (`out/kept`) and the command that resumes."""
+    from .._validate import check_writable
+    from ..interrupt import Interrupted
+
+    check_writable("--out", out / first_file)
+    _hold(out, "--out")
+    try:
+        return run()
+    except Interrupted:
+        typer.echo(f"interrupted: the finished {parts} are kept in {out / kept}; resume with: {_resume_command()}", err=True)
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+
+
 @app.command()
 @_guarded
 def reproduce(
@@ -559,7 +575,7 @@ def reproduce(
     """Reproduce the paper: every figure (3-17) into one folder and a report that sets each value the
     paper reports beside jaxrock's, with the difference and a verdict (reproduced / differs,
     explained / not reproduced) and the computed reason where it differs."""
-    from .._validate import JaxrockInputError, check_writable
+    from .._validate import JaxrockInputError
 
     names = None
     if only is not None:
@@ -567,16 +583,9 @@ def reproduce(
         bad = [n for n in names if n not in _steps()]
         if not names or bad:
             raise JaxrockInputError(f"--only {only!r}: {', '.join(bad) or 'no step'}; valid: comma-separated {', '.join(_steps())}")
-    check_writable("--out", out / "report.md")
-    _hold(out, "--out")
-    from ..interrupt import Interrupted
     from ..paper.reproduce import reproduce as run
 
-    try:
-        rep = run(out, quick=quick, only=names, progress=not quiet)
-    except Interrupted:
-        typer.echo(f"interrupted: the finished steps are kept in {out / 'findings'}; resume with: {_resume_command()}", err=True)
-        raise typer.Exit(EXIT_INTERRUPTED) from None
+    rep = _in_folder(out, "report.md", "steps", "findings", lambda: run(out, quick=quick, only=names, progress=not quiet))
     counts = rep.counts()
     typer.echo(f"{sum(counts.values())} values of the paper in {sum(rep.seconds.values()):.0f} s of computation: "
                + ", ".join(f"{n} {v}" for v, n in counts.items()))
@@ -595,19 +604,10 @@ def stability(
     scenes, each against a refined reference: finite or not, status, error, stated accuracy, run
     time, verdict (holds / flagged / ok but off / not finite). Exit 1 where a status lies (ok but
     off) or a summary is not finite."""
-    from .._validate import check_writable
-
-    check_writable("--out", out / "stability.md")
-    _hold(out, "--out")
-    from ..interrupt import Interrupted
     from ..numerics.stability import NOT_FINITE, OFF, VERDICTS
     from ..numerics.stability import stability as run
 
-    try:
-        rows = run(out, quick=quick, progress=not quiet)
-    except Interrupted:
-        typer.echo(f"interrupted: the finished cases are kept in {out / 'stability_cases'}; resume with: {_resume_command()}", err=True)
-        raise typer.Exit(EXIT_INTERRUPTED) from None
+    rows = _in_folder(out, "stability.md", "cases", "stability_cases", lambda: run(out, quick=quick, progress=not quiet))
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
     typer.echo(f"{len(rows)} runs: " + ", ".join(f"{n} {v}" for v, n in counts.items()))
     for r in rows:
@@ -630,20 +630,10 @@ def work_precision(
     and the SM (Tsit5 and generalized-α over the tolerance, Checked, the spring's smoothing and
     backbone, the number of elements, OpenSeesPy when the `opensees` extra is installed), per scene
     and per vmapped grid, against converged references, the defaults marked."""
-    from .._validate import check_writable
-
-    check_writable("--out", out / "work_precision.md")
-    _hold(out, "--out")
-    from ..interrupt import Interrupted
     from ..numerics.work_precision import defaults_table
     from ..numerics.work_precision import work_precision as run
 
-    try:
-        rows = run(out, quick=quick, progress=not quiet)
-    except Interrupted:
-        typer.echo(f"interrupted: the finished panels are kept in {out / 'work_precision_panels'}; resume with: {_resume_command()}",
-                   err=True)
-        raise typer.Exit(EXIT_INTERRUPTED) from None
+    rows = _in_folder(out, "work_precision.md", "panels", "work_precision_panels", lambda: run(out, quick=quick, progress=not quiet))
     typer.echo(f"{len(rows)} points; the defaults against the peers:")
     for line in defaults_table(rows):
         typer.echo(line)

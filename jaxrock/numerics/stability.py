@@ -32,6 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .kept import run_parts, write_csv, write_text
+
 G = 9.81
 HOLDS, FLAGGED, OFF, NOT_FINITE, NO_REFERENCE = "holds", "flagged", "ok but off", "not finite", "no reference"
 VERDICTS = (HOLDS, FLAGGED, OFF, NOT_FINITE, NO_REFERENCE)
@@ -193,32 +195,16 @@ def run_case(case: Case, n_elements: int) -> list[dict]:
 
 def stability(out: Path, *, quick: bool = False, progress: bool = True) -> list[dict]:
     """Run the matrix (`CASES`; quick: the cases marked quick, 4 elements against 10) into `out`:
-    `stability.md`, `stability.csv`, `stability.png`. Returns the rows.
-
-    Each finished case is kept in `out/stability_cases/<index>.json` with the mode and the version;
-    a signal stops the run after the case in progress (`jaxrock.interrupt`) and a rerun resumes."""
-    from tqdm.auto import tqdm
-
+    `stability.md`, `stability.csv`, `stability.png`. Returns the rows. Each finished case is kept
+    in `out/stability_cases/` (`jaxrock.numerics.kept.run_parts`): a rerun resumes."""
     from ..cache import package_version
-    from ..interrupt import stop_point
 
     out = Path(out)
-    kept = out / "stability_cases"
-    kept.mkdir(parents=True, exist_ok=True)
     cases = [c for c in CASES if c.quick or not quick]
     n_elements = 4 if quick else 10
     key = {"quick": quick, "version": package_version()}
-    rows = []
-    for case in tqdm(cases, desc="stability", unit="case", disable=not progress):
-        path = kept / f"{CASES.index(case):02d}.json"
-        stored = json.loads(path.read_text()) if path.exists() else None
-        if stored is not None and stored["key"] == key and stored["case"] == case.name:
-            rows.extend(stored["rows"])
-            continue
-        new = run_case(case, n_elements)
-        write_text(path, json.dumps({"key": key, "case": case.name, "rows": new}))
-        rows.extend(new)
-        stop_point()
+    rows = run_parts(cases, lambda c: run_case(c, n_elements), out / "stability_cases", key,
+                     name=lambda c: f"{CASES.index(c):02d}", desc="stability", progress=progress)
     write(out, rows, quick=quick, n_elements=n_elements)
     return rows
 
@@ -238,25 +224,8 @@ def write(out: Path, rows: list[dict], *, quick: bool, n_elements: int) -> None:
         lines.append(f"| {r['case']} | {r['model']} | {'yes' if r['finite'] else 'no'} | {r['status']} | {r['max_theta']:.6g} | "
                      f"{r['reference']:.6g} | {r['error']:.1e} | {r['accuracy']:.0e} | {r['verdict']} | {r['ms']:.1f} |")
     write_text(out / "stability.md", "\n".join(lines) + "\n")
-    csv = [",".join(COLUMNS)] + [",".join(_csv(r[c]) for c in COLUMNS) for r in rows]
-    write_text(out / "stability.csv", "\n".join(csv) + "\n")
+    write_csv(out / "stability.csv", COLUMNS, rows)
     _heat_map(out / "stability.png", rows)
-
-
-def write_text(path: Path, text: str) -> None:
-    """`text` into `path`, whole or not at all (`jaxrock.io.files.write_atomically`)."""
-    from ..io.files import write_atomically
-
-    write_atomically(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
-
-
-def _csv(x) -> str:
-    if isinstance(x, bool):
-        return str(int(x))
-    if isinstance(x, float):
-        return repr(x)
-    s = str(x)
-    return f'"{s}"' if "," in s else s
 
 
 def _heat_map(path: Path, rows: list[dict]) -> None:

@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .stability import write_text
+from .kept import run_parts, write_csv, write_text
 
 G = 9.81
 COLUMNS = ("panel", "series", "setting", "error", "ms", "compile_s", "failed", "cells", "default", "peer")
@@ -386,29 +386,15 @@ def run_panel(panel: Panel, s: Settings) -> list[dict]:
 
 
 def work_precision(out: Path, *, quick: bool = False, progress: bool = True) -> list[dict]:
-    """Every panel into `out` (`work_precision.csv`, `.md`, `.png`); each finished panel is kept in
-    `out/work_precision_panels/<name>.json` (mode and version) and a rerun resumes."""
-    from tqdm.auto import tqdm
-
+    """Every panel into `out` (`work_precision.csv`, `.md`, `.png`). Each finished panel is kept
+    in `out/work_precision_panels/` (`jaxrock.numerics.kept.run_parts`): a rerun resumes."""
     from ..cache import package_version
-    from ..interrupt import stop_point
 
     out = Path(out)
-    kept = out / "work_precision_panels"
-    kept.mkdir(parents=True, exist_ok=True)
     s = Settings.make(quick)
     key = {"quick": quick, "version": package_version(), "opensees": s.opensees}
-    rows = []
-    for panel in tqdm(PANELS, desc="work-precision", unit="panel", disable=not progress):
-        path = kept / f"{panel.name}.json"
-        stored = json.loads(path.read_text()) if path.exists() else None
-        if stored is not None and stored["key"] == key:
-            rows.extend(stored["rows"])
-            continue
-        new = run_panel(panel, s)
-        write_text(path, json.dumps({"key": key, "rows": new}))
-        rows.extend(new)
-        stop_point()
+    rows = run_parts(PANELS, lambda p: run_panel(p, s), out / "work_precision_panels", key, name=lambda p: p.name,
+                     desc="work-precision", progress=progress)
     write(out, rows, s)
     return rows
 
@@ -437,8 +423,6 @@ def defaults_table(rows: list[dict]) -> list[str]:
 
 
 def write(out: Path, rows: list[dict], s: Settings) -> None:
-    from .stability import _csv
-
     lines = [f"# Work–precision ({'quick' if s.quick else 'full'})", "",
              "Error: max |Δ max θ/α′| against each panel's converged reference (over a grid's cells, or a peer's subsample); "
              "ms: warm run time per scene (a grid: the vmapped spectrum over its cells); compile apart. "
@@ -451,7 +435,7 @@ def write(out: Path, rows: list[dict], s: Settings) -> None:
                   for r in pts]
         lines.append("")
     write_text(out / "work_precision.md", "\n".join(lines))
-    write_text(out / "work_precision.csv", "\n".join([",".join(COLUMNS)] + [",".join(_csv(r[c]) for c in COLUMNS) for r in rows]) + "\n")
+    write_csv(out / "work_precision.csv", COLUMNS, rows)
     _figure(out / "work_precision.png", rows)
 
 
