@@ -483,3 +483,23 @@ def test_bad_inputs():
         SpringIntegrator(solver="euler")
     with pytest.raises(JaxrockInputError, match="Save fields"):
         simulate(SpringModel(blk), RickerPulse(1.0, 1.0), save=Save([0.0, 1.0], ("nope",)))
+
+
+def test_overturning_event_located_where_newton_stalled():
+    """Issue 28's failed cell of figure 6 (undamped SM + ΔI, 2h = 10 m, tanα = 0.1, a_p/(g tanα) =
+    8.16, ω_p/p = 2.81): Tsit5 1e-10 ended `solver_failed` with max θ/α = 1 and not overturned,
+    optimistix's Newton stalling on the overturning event. With the safeguarded Newton–bisection of
+    the RM (`jaxrock._rootfind.SafeNewton`) it overturns, status ok, at the time Tsit5 1e-12 finds
+    (measured −0.1169026452 against −0.1169026641 s); the RM (η = 1) overturns too."""
+    import jaxrock as jr
+    from jaxrock.spring import SpringIntegrator, SpringModel
+
+    blk = jr.Block.from_slenderness(10.0, 0.1)
+    model = SpringModel(blk, added_masses=True, cbar=0.0)
+    ex = jr.RickerPulse(8.161290322580644 * 9.81 * 0.1, 2.806451612903226 * float(blk.p))
+    s = jr.simulate(model, ex)
+    ref = jr.simulate(model, ex, integrator=SpringIntegrator(rtol=1e-12, atol=1e-12, solver="tsit5", max_steps=2_000_000))
+    assert str(jr.status_names(s.status)) == "ok" and str(jr.status_names(ref.status)) == "ok"
+    assert bool(s.overturned) and bool(ref.overturned) and float(s.max_theta) == 1.0
+    assert float(s.t_overturn) == pytest.approx(float(ref.t_overturn), abs=1e-6)
+    assert bool(jr.simulate(jr.RigidModel(blk, eta=1.0), ex).overturned)

@@ -25,6 +25,7 @@ from .. import _linalg
 from .._validate import JaxrockInputError
 from ..bookkeeping import Record
 from ..excitation import AbstractExcitation
+from .._rootfind import SafeNewton
 from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
 from .system import SpringSystem
@@ -312,7 +313,7 @@ class DiffraxSpringStepper(AbstractStepper):
         def over_fn(t, y, args, **kw):
             return watch.overturn - jnp.abs(y[0])
 
-        return diffrax.Event((over_fn, *more), root_finder=optx.Newton(rtol=1e-10, atol=1e-12 * self.model.block.alpha_r))
+        return diffrax.Event((over_fn, *more), root_finder=SafeNewton(rtol=1e-10, atol=1e-12 * self.model.block.alpha_r))
 
     def _history(self, excitation) -> Solution:
         """A history: one solve to the run's end, saved at `save.ts`."""
