@@ -604,14 +604,14 @@ def stability(
     scenes, each against a refined reference: finite or not, status, error, stated accuracy, run
     time, verdict (holds / flagged / ok but off / not finite). Exit 1 where a status lies (ok but
     off) or a summary is not finite."""
-    from ..numerics.stability import NOT_FINITE, OFF, VERDICTS
+    from ..numerics.stability import HOLDS, NOT_FINITE, OFF, VERDICTS
     from ..numerics.stability import stability as run
 
     rows = _in_folder(out, "stability.md", "cases", "stability_cases", lambda: run(out, quick=quick, progress=not quiet))
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
     typer.echo(f"{len(rows)} runs: " + ", ".join(f"{n} {v}" for v, n in counts.items()))
     for r in rows:
-        if r["verdict"] not in ("holds",):
+        if r["verdict"] != HOLDS:
             typer.echo(f"  {r['case']} | {r['model']}: {r['verdict']} ({r['status']}, error {r['error']:.1e}, accuracy {r['accuracy']:.0e})")
     typer.echo(f"wrote {out / 'stability.md'}, {out / 'stability.csv'}, {out / 'stability.png'}")
     if counts[OFF] or counts[NOT_FINITE]:

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .kept import run_parts, write_csv, write_text
+from .stability import reference, run_timed, timed
 
 G = 9.81
 COLUMNS = ("panel", "series", "setting", "error", "ms", "compile_s", "failed", "cells", "default", "peer")
@@ -77,7 +78,6 @@ class Settings:
     flex_grid: int = 8
     subsample: int = 16
     repeat: int = 3
-    scipy: bool = True
     opensees: bool = field(default_factory=lambda: _has_opensees())
 
     @classmethod
@@ -131,39 +131,10 @@ def model_of(kind: str, *, smoothing=1e-4, backbone="tanh", n_elements=10):
     return SpringModel(flexible_block(), Column.concrete(), n_elements=n_elements, smoothing=smoothing, backbone=backbone)
 
 
-def reference_integrator(kind: str):
-    from .stability import reference
-
-    return reference(kind)
-
-
-# -- measuring ---------------------------------------------------------------------------------
-def _timed(call, repeat: int):
-    """(result, warm seconds, compile seconds): the first call, then the best of `repeat`."""
-    t = time.perf_counter()
-    out = call()
-    first = time.perf_counter() - t
-    best = math.inf
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = call()
-        best = min(best, time.perf_counter() - t)
-    return out, best, max(first - best, 0.0)
-
-
 def _scene_values(model, integrator, repeat):
-    import jax
-
     import jaxrock as jr
 
-    ex = scene_pulse(model.block)
-
-    def call():
-        sol = jr.simulate(model, ex, integrator=integrator)
-        jax.block_until_ready(sol.max_theta)
-        return sol
-
-    sol, best, comp = _timed(call, repeat)
+    sol, best, comp = run_timed(model, scene_pulse(model.block), integrator, repeat)
     return np.atleast_1d(float(sol.max_theta)), np.atleast_1d(str(jr.status_names(sol.status)) != "ok"), best, comp
 
 
@@ -171,15 +142,15 @@ def _grid_values(model, integrator, n, repeat):
     import jaxrock as jr
 
     wr, ar = grid_axes(n)
-    spec, best, comp = _timed(lambda: jr.overturning_spectrum(model, wr, ar, integrator=integrator, progress=False), repeat)
+    spec, best, comp = timed(lambda: jr.overturning_spectrum(model, wr, ar, integrator=integrator, progress=False), repeat)
     return np.asarray(spec.max_theta).ravel(), (np.asarray(spec.status) != 0).ravel(), best / (n * n), comp
 
 
-def _point(panel, series, setting, values, failed, ref, seconds, compile_s, *, default=False, peer=False, cells=None):
+def _point(panel, series, setting, values, failed, ref, seconds, compile_s, *, default=False, peer=False):
     err = np.abs(values - ref)
     error = float(np.max(err)) if np.all(np.isfinite(err)) else math.nan
     return dict(panel=panel.name, series=series, setting=setting, error=error, ms=1e3 * seconds, compile_s=compile_s,
-                failed=int(np.sum(failed)), cells=int(values.size if cells is None else cells), default=default, peer=peer)
+                failed=int(np.sum(failed)), cells=int(values.size), default=default, peer=peer)
 
 
 def _subsample(n, k, seed=0):
@@ -202,7 +173,7 @@ def _jax_series(panel, s: Settings, model, ref, series):
 
 
 def _reference(panel, s: Settings, model):
-    integ = reference_integrator(panel.model)
+    integ = reference(panel.model)
     if panel.grid:
         vals, failed, _, _ = _grid_values(model, integ, s.flex_grid if panel.model == "flexible" else s.grid, 0)
     else:
@@ -230,8 +201,7 @@ def rigid_panel(panel, s: Settings):
     rows = _jax_series(panel, s, model, ref, series)
     if not panel.grid:
         rows += _float32_rows(panel, s, ref)
-    if s.scipy:
-        rows += _scipy_rows(panel, s, ref)
+    rows += _scipy_rows(panel, s, ref)
     return rows
 
 
@@ -277,14 +247,15 @@ def _scipy_rows(panel, s: Settings, ref):
 def _float32_rows(panel, s: Settings, ref):
     """Tsit5 over rtol in float32: a child process with x64 switched off after import."""
     code = (
-        "import json, sys, time, jax\n"
+        "import json, sys, jax\n"
         "import jaxrock as jr\n"
         "jax.config.update('jax_enable_x64', False)\n"
-        "from jaxrock.numerics.work_precision import model_of, scene_pulse, _timed\n"
+        "from jaxrock.numerics.stability import run_timed\n"
+        "from jaxrock.numerics.work_precision import model_of, scene_pulse\n"
         "m = model_of('rigid'); ex = scene_pulse(m.block); out = []\n"
         "for r in json.loads(sys.argv[1]):\n"
         "    integ = jr.EventIntegrator(rtol=r, atol=r * 1e-2, root_tol=1e-6)\n"
-        "    sol, best, comp = _timed(lambda: jax.block_until_ready(jr.simulate(m, ex, integrator=integ)), int(sys.argv[2]))\n"
+        "    sol, best, comp = run_timed(m, ex, integ, int(sys.argv[2]))\n"
         "    out.append([r, float(sol.max_theta), str(jr.status_names(sol.status)), best, comp])\n"
         "print(json.dumps(out))\n"
     )
@@ -366,7 +337,7 @@ def smoothing_panel(panel, s: Settings):
 def mesh_panel(panel, s: Settings):
     """The flexible column over its number of elements at the default integrator, against 20
     elements by generalized-α 1e-8 (one scene)."""
-    ref, failed, _, _ = _scene_values(model_of("flexible", n_elements=20), reference_integrator("flexible"), 0)
+    ref, failed, _, _ = _scene_values(model_of("flexible", n_elements=20), reference("flexible"), 0)
     if failed.any():
         raise RuntimeError("the 20-element reference failed")
     rows = []
@@ -414,11 +385,9 @@ def defaults_table(rows: list[dict]) -> list[str]:
         peers = [r for r in pts if r["peer"] and np.isfinite(r["error"])]
         good = [r for r in peers if r["error"] <= max(d["error"], 1e-15)]
         peer = min(good, key=lambda r: r["ms"]) if good else (min(peers, key=lambda r: r["error"]) if peers else None)
-        p_text = f"{peer['series']} {peer['setting']} ({peer['error']:.1e})" if peer else "—"
-        ratio = f"{peer['ms'] / d['ms']:.0f}×" if peer else "—"
-        lines.append(f"| {panel.title} | {d['series']} {d['setting']} | {d['ms']:.3g} | {d['error']:.1e} | {p_text} | "
-                     f"{peer['ms']:.3g} | {ratio} |" if peer else
-                     f"| {panel.title} | {d['series']} {d['setting']} | {d['ms']:.3g} | {d['error']:.1e} | — | — | — |")
+        p_cells = (f"{peer['series']} {peer['setting']} ({peer['error']:.1e}) | {peer['ms']:.3g} | {peer['ms'] / d['ms']:.0f}×" if peer
+                   else "— | — | —")
+        lines.append(f"| {panel.title} | {d['series']} {d['setting']} | {d['ms']:.3g} | {d['error']:.1e} | {p_cells} |")
     return lines
 
 
