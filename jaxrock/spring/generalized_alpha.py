@@ -218,7 +218,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 return Kb
 
             Kinv = _linalg.inv(jax.vmap(k_eff)(dts))  # (n_levels, N, N)
-            y_init = mech.initial_state()  # [q, v] (+ [dissipated, input] when tracked)
+            y_init = mech.initial_state()  # [q, v] (+ the work integrals `WORK_FIELDS` when tracked)
             q0, v0 = y_init[:N], y_init[N : 2 * N]
             f0_rest, f0_ext, f0_damp = mech.forces_without_spring(t0, q0, v0, excitation)
             f0_tot = f0_rest - spring(q0[0]) * e0
@@ -233,7 +233,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
             k_start = jnp.minimum(j_exc + 1, n_levels - 1)
             carry = dict(
                 n=jnp.zeros((), stride.dtype), k=k_start, t=t0, q=q0, v=v0, a=a0, f=f0_tot,
-                ew=jnp.zeros(2, dtype),  # [dissipated, input] work
+                ew=y_init[2 * N :] if track else jnp.zeros(0, dtype),  # the work integrals (`WORK_FIELDS`)
                 fd=f0_damp, fe=f0_ext,
                 rec=Record.start(q0[0]), done=jnp.asarray(False), failed=jnp.asarray(False),
                 rho=jnp.asarray(1.0, dtype),  # Newton's contraction, as last measured (unknown: 1)
@@ -337,7 +337,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
             dt = s["dt"]
             ew = c["ew"]
             if track:
-                ew = ew + 0.5 * dt * jnp.stack([c["v"] @ c["fd"] + s["v1"] @ s["fd1"], c["v"] @ c["fe"] + s["v1"] @ s["fe1"]])
+                ew = ew + 0.5 * dt * (mech.powers(c["v"], c["fe"], c["fd"]) + mech.powers(s["v1"], s["fe1"], s["fd1"]))
             finished = rec.overturned | (t1 >= t_stop)
             if summary:
                 energy = mech.kinetic(s["v1"]) + mech.potential(s["q1"])

@@ -181,7 +181,7 @@ class SpringModel(AbstractModel):
 
     def system(self, track_energy: bool = False) -> SpringSystem:
         """The assembled system of this model (`SpringSystem`): its arrays computed once; with
-        `track_energy`, the dissipated and input work integrated alongside."""
+        `track_energy`, the work integrals (`system.WORK_FIELDS`: damper, Rayleigh, input) integrated alongside."""
         return assemble(self, track_energy)
 
     # -- public pieces for calibration / custom solves --------------------------------------------

@@ -23,10 +23,17 @@ HISTORY_FIELDS = (
     "section_moment",
     "kinetic",
     "potential",
+    "elastic",
     "dissipated",
+    "damper",
+    "rayleigh",
     "input",
 )
-ENERGY_FIELDS = ("kinetic", "potential", "dissipated", "input")
+# the energy terms [J]: kinetic, potential (gravity + spring + column strain, from the rest state),
+# elastic (the column's strain energy alone), the work dissipated (damper + rayleigh) and the
+# ground's input work; kinetic + potential + dissipated = input (the balance)
+ENERGY_FIELDS = ("kinetic", "potential", "elastic", "dissipated", "damper", "rayleigh", "input")
+WORK_FIELDS = ("damper", "rayleigh", "input")  # the work integrals tracked beside the state
 
 
 class SpringSystem(eqx.Module):
@@ -123,6 +130,13 @@ class SpringSystem(eqx.Module):
         My θs log cosh(θ/θs) − m g h (1 − cosθ) → SPEC's E(θ) = m g R(sinα|θ| − cosα(1 − cosθ))
         as θs → 0 (for a plain block, My = m g R sinα and h = R cosα)."""
         return self.spring_potential(theta) - self.m * G * self.h * (1 - jnp.cos(theta))
+
+    def elastic(self, q):
+        """The column's strain energy from its preloaded rest state [J] (0 for the one-DOF body)."""
+        if self.n is None:
+            return jnp.zeros(())
+        rest = beam.strain_energy(self.q_eq, self.h, self.n, self.EA, self.EI)
+        return beam.strain_energy(q, self.h, self.n, self.EA, self.EI) - rest
 
     def kinetic(self, v):
         if self.n is None:
@@ -225,8 +239,15 @@ class SpringSystem(eqx.Module):
             a = a.at[0].set(0.0)
         parts = [v, a]
         if self.track_energy:
-            parts.append(jnp.stack([v @ f_damp, v @ f_ext]))
+            parts.append(self.powers(v, f_ext, f_damp))
         return jnp.concatenate(parts)
+
+    def powers(self, v, f_ext, f_damp):
+        """The rates of the work integrals `WORK_FIELDS` [W]: the damper's c θ̇², the column's
+        Rayleigh v·f_R (the rest of v·f_damp) and the ground's v·f_ext."""
+        damper = jnp.zeros(()) if self.fixed_base else self.c * v[0] ** 2
+        rayleigh = jnp.zeros(()) if self.n is None else v @ f_damp - damper
+        return jnp.stack([damper, rayleigh, v @ f_ext])
 
     def initial_state(self, theta0=0.0, theta_dot0=0.0):
         theta0 = jnp.asarray(theta0, dtype=float)
@@ -244,7 +265,7 @@ class SpringSystem(eqx.Module):
             v = beam.from_positions(theta_dot0 * yr, -theta_dot0 * xr + beam.node_heights(self.h, self.n), jnp.full_like(phi, theta_dot0), self.h, self.n)
         y0 = [q, v]
         if self.track_energy:
-            y0.append(jnp.zeros(2))
+            y0.append(jnp.zeros(len(WORK_FIELDS)))
         return jnp.concatenate(y0)
 
     def atol_scale(self):
@@ -261,7 +282,7 @@ class SpringSystem(eqx.Module):
             sq = jnp.where(sq > 0, self.h * sq, 1.0) * self.alpha_r
         parts = [sq, sq * self.p_r]
         if self.track_energy:
-            parts.append(jnp.ones(2) * self.m * G * self.R_r * self.alpha_r)
+            parts.append(jnp.ones(len(WORK_FIELDS)) * self.m * G * self.R_r * self.alpha_r)
         return jnp.concatenate(parts) * self.deform_scale
 
     def mechanical_energy(self, y):
@@ -291,10 +312,12 @@ class SpringSystem(eqx.Module):
                 out[name] = self.kinetic(v)
             elif name == "potential":
                 out[name] = self.potential(q)
+            elif name == "elastic":
+                out[name] = self.elastic(q)
             elif name == "dissipated":
-                out[name] = y[-2]
-            elif name == "input":
-                out[name] = y[-1]
+                out[name] = y[-3] + y[-2]
+            elif name in WORK_FIELDS:
+                out[name] = y[2 * self.ndof + WORK_FIELDS.index(name)]
         return out
 
 
