@@ -45,7 +45,8 @@ _EXPORTS = {
     "fit_lognormal": "analyses.fragility",
     **dict.fromkeys(["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
                      "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
-                     "rm_target", "Sweep", "run_sweep", "least_overturning_scale"], "analyses"),
+                     "rm_target", "Sweep", "run_sweep", "least_overturning_scale", "Boundary", "find_boundary",
+                     "boundary_slope"], "analyses"),
     "calibration_report": "reports",  # writes figures: matplotlib is imported with it
 }
 __all__ = list(_EXPORTS)

@@ -8,10 +8,13 @@
 - `scenes`: a scenes file run row by row, vmapped by structure (`run_scenes`);
 - `sweep`: every scene of a product of axes, chunk by chunk into a Zarr store, on local devices or a
   Dask cluster (`Sweep`, `run_sweep`);
+- `boundary`: overturning boundaries by gradient — Newton on the margin (1 − max|θ|/α′)² along a
+  parameter (`find_boundary`), and a boundary's implicit derivative (`boundary_slope`);
 - `suite`: the least overturning scale of every record of a suite for every column, by vmapped
   bisection (`least_overturning_scale`).
 """
 
+from .boundary import Boundary, boundary_slope, find_boundary, margin
 from .calibration import CalibrationResult, calibrate_cbar, fit_power_law
 from .free_rocking import energy_ratio, energy_ratio_grid, rm_target
 from .engine import run_batch
@@ -22,4 +25,4 @@ from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_over
 
 __all__ = ["run_batch", "Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries",
            "run_scenes", "CalibrationResult", "calibrate_cbar", "energy_ratio", "energy_ratio_grid", "fit_power_law", "rm_target", "Sweep", "run_sweep",
-           "least_overturning_scale"]
+           "least_overturning_scale", "Boundary", "find_boundary", "boundary_slope", "margin"]

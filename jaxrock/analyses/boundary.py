@@ -1,0 +1,127 @@
+"""Overturning boundaries by gradient: where a family of scenes turns from surviving to overturning,
+and how that place moves with a parameter.
+
+A boundary itself (the `overturned` flag) has no derivative, but the run's peak does: approaching an
+overturning boundary from the surviving side, the motion ends ever closer to the unstable equilibrium
+|θ| = α′, where the potential has a smooth maximum, so 1 − max|θ|/α′ shrinks like the square root of the
+distance to the boundary. The margin
+
+    ψ = (1 − max|θ|/α′)²                                                      (`margin`)
+
+is therefore close to linear in any parameter there, 0 on the overturning side, and positive on the
+surviving side:
+
+- `find_boundary`: Newton's method on ψ along one scalar parameter x (ψ′ from one forward-mode pass,
+  `jax.jvp`), safeguarded by the bracket [overturns, survives]: a Newton step that leaves the bracket,
+  or an overturned iterate (ψ = 0, no slope), bisects instead. ψ is only *close* to linear, so Newton
+  converges linearly at worst, and a bracket with several boundaries (overturning is not monotone in
+  a_p, nor in a record's scale) ends at one of them, as bisection would.
+- `boundary_slope`: the implicit derivative of a boundary x*(p) in parameters p, −(∂ψ/∂p)/(∂ψ/∂x),
+  both partials from one `jax.jacfwd` pass at a point just inside the surviving side (x* less a small
+  step: the ratio, not either partial, has a limit on the boundary). It is traceable: `jax.vmap` it over
+  boundary points (`notebooks/03_gradients.ipynb`, all ω_p/p of a spectrum's line in one batch).
+
+The runs must be forward-mode differentiable in x and p: the rigid model with
+`EventIntegrator(autodiff="forward")`, the spring models with their defaults.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array
+
+from .._validate import JaxrockInputError
+from ..results import STATUS_NAMES, Solution, status_codes
+
+
+def margin(solution: Solution):
+    """ψ = (1 − max|θ|/α′)²: 0 when the run overturns, close to linear in any parameter near an
+    overturning boundary (module docstring)."""
+    return (1.0 - solution.max_theta) ** 2
+
+
+class Boundary(eqx.Module):
+    """The result of `find_boundary`.
+
+    - `value`: the surviving end of the final bracket, the boundary to within `width`;
+    - `overturning`: the bracket's other end (the run there overturns);
+    - `width`: |value − overturning|;
+    - `n_runs`: simulations taken; `iterates`: the x of each, in order;
+    - `converged`: the bracket is within `tol`;
+    - `status`: "ok", or the name of the first other status a run ended with (`STATUS_NAMES`;
+      the search stops there, `converged` False).
+    """
+
+    value: float
+    overturning: float
+    width: float
+    n_runs: int
+    iterates: tuple[float, ...]
+    converged: bool
+    status: str
+
+
+def find_boundary(run, overturns_at, survives_at, *, tol: float = 1e-4, max_runs: int = 60) -> Boundary:
+    """The boundary between `overturns_at` and `survives_at` along the scalar parameter of `run`
+    (x ↦ `Solution`), by safeguarded Newton on `margin` (module docstring).
+
+    `run(overturns_at)` must overturn and `run(survives_at)` survive, else a `JaxrockInputError`;
+    either order of the two ends along x is fine. `tol`: the bracket width at which the search
+    stops (absolute, in x). A run on a host loop: one simulation per iteration, not vmappable."""
+    if not (np.isfinite(overturns_at) and np.isfinite(survives_at)) or overturns_at == survives_at:
+        raise JaxrockInputError(f"find_boundary: overturns_at = {overturns_at}, survives_at = {survives_at}; "
+                                "valid: two different finite values")
+    if not tol > 0:
+        raise JaxrockInputError(f"find_boundary: tol = {tol}; valid: > 0")
+
+    def margin_and_flags(x):
+        sol = run(x)
+        return margin(sol), (sol.overturned, status_codes(sol.status))
+
+    # one simulation per iterate: ψ, ψ′ (forward mode) and the run's flags
+    evaluate = jax.jit(lambda x: jax.jvp(margin_and_flags, (x,), (jnp.ones_like(x),), has_aux=True))
+    _, _, (over, code) = evaluate(jnp.asarray(float(overturns_at)))
+    if int(code) != 0 or not bool(over):
+        raise JaxrockInputError(f"find_boundary: overturns_at = {overturns_at} does not overturn "
+                                f"(status {STATUS_NAMES[int(code)]}); valid: a value whose run overturns")
+    lo, hi = float(overturns_at), float(survives_at)  # lo: overturns, hi: survives (either order in x)
+    x, iterates = hi, []
+    while len(iterates) < max_runs:
+        psi, slope, (over, code) = evaluate(jnp.asarray(x))
+        psi, slope = float(psi), float(slope)
+        iterates.append(x)
+        if int(code) != 0:
+            return Boundary(hi, lo, abs(hi - lo), len(iterates), tuple(iterates), False, STATUS_NAMES[int(code)])
+        if len(iterates) == 1 and bool(over):
+            raise JaxrockInputError(f"find_boundary: survives_at = {survives_at} overturns; valid: a value whose run survives")
+        if bool(over) or psi == 0.0:
+            lo = x
+        else:
+            hi = x
+        if abs(hi - lo) <= tol:
+            break
+        # Newton toward the overturning end: ψ falls to 0 there, so the step must point that way
+        step = -psi / slope if slope != 0.0 else np.nan
+        newton = x + step
+        inside = np.isfinite(newton) and min(lo, hi) < newton < max(lo, hi) and psi > 0.0
+        x = newton if inside else 0.5 * (lo + hi)
+    return Boundary(hi, lo, abs(hi - lo), len(iterates), tuple(iterates), abs(hi - lo) <= tol, "ok")
+
+
+def boundary_slope(run, x_star, params, step) -> tuple[Array, Array]:
+    """(dx*/dp, max|θ|/α′ there): the implicit derivative of the boundary x*(p) of `run`
+    ((x, p) ↦ `Solution`) in the parameters `p` (a scalar or an array), from the partials of
+    `margin` at x* − `step` (`step` signed, so that x* − step survives; e.g. a bisection's last
+    bracket). The returned peak should be close to 1: where it is not, the boundary is a jump of the
+    outcome (not a limit of surviving runs) and the slope means nothing. Traceable (`jax.vmap`)."""
+    x = jnp.asarray(x_star, dtype=float) - step
+
+    def margin_and_peak(y, q):
+        sol = run(y, q)
+        return margin(sol), sol.max_theta
+
+    (d_x, d_p), peak = jax.jacfwd(margin_and_peak, argnums=(0, 1), has_aux=True)(x, jnp.asarray(params, dtype=float))
+    return -d_p / d_x, peak
