@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
@@ -123,9 +124,16 @@ class Record(eqx.Module):
                            (self.overturned | seen, jnp.where(seen, t, self.t_overturn)))
 
     def overturn_located(self, hit, t) -> "Record":
-        """The overturning as an integrator's event located it (`hit`, at time `t`): it replaces
-        the estimate from the step ends (`Watch.steps`)."""
-        return eqx.tree_at(lambda r: (r.overturned, r.t_overturn), self, (hit, jnp.where(hit, t, jnp.inf)))
+        """The overturning as an integrator's event located it (`hit`, at time `t`): its time
+        replaces the estimate from the step interpolants (`Watch.steps`). A crossing the
+        interpolants saw and no event located still counts (a peak grazing just past the threshold
+        within one step, both step ends below it: the event sees no sign change): the peak reached
+        the threshold, and a result never contradicts its own flags (max_theta at the threshold is
+        overturned). Its time, from the interpolants, carries no derivative: where no step
+        crosses, the interpolants' crossing time has NaN partials, which reverse mode would carry
+        into every gradient through the masked branch (0·NaN)."""
+        return eqx.tree_at(lambda r: (r.overturned, r.t_overturn), self,
+                           (hit | self.overturned, jnp.where(hit, t, jax.lax.stop_gradient(self.t_overturn))))
 
     def merge(self, later: "Record") -> "Record":
         """This record followed by the record of the run's next piece."""

@@ -43,9 +43,10 @@ def test_find_boundary_agrees_with_bisection():
 
 
 def test_find_boundary_quasi_rigid_spring_model():
-    """The same search on the quasi-rigid SM (its default's settings in forward mode): within 1e-5 of
-    its bisected line (measured 4e-6: single and batched runs part that far on the boundary, where a
-    run either just reaches α′ or not), in 16 runs where bisection takes 21."""
+    """The same search on the quasi-rigid SM (its default's settings in forward mode): Newton's
+    bracket holds the bisected line (measured 8e-7 from its surviving end), in 16 runs where
+    bisection takes 21. (Before grazing overturns were flagged, runs with max_theta = 1 and not
+    overturned put the bisected line 4e-6 away from the margin's zero.)"""
     model = jr.SpringModel(BLOCK)
     forward = dataclasses.replace(model.default_integrator(), autodiff="forward")
 
@@ -54,7 +55,7 @@ def test_find_boundary_quasi_rigid_spring_model():
 
     line = float(jr.overturning_spectrum(model, [3.0], A_GRID, refine=BISECTIONS, progress=False).overturn_line[0])
     b = jr.find_boundary(run, overturns_at=4.0, survives_at=2.0, tol=1e-6)
-    assert b.converged and abs(b.value - line) < 1e-5 and b.n_runs <= 18, (b.value, line, b.n_runs)
+    assert b.converged and b.value < line <= b.overturning + 0.5 * 2.0**-BISECTIONS and b.n_runs <= 18, (b.value, line, b.n_runs)
 
 
 def test_find_boundary_least_base_width():

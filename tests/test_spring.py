@@ -307,6 +307,18 @@ def test_overturning_event():
     assert s.status == Status.ok
 
 
+def test_grazing_overturn_is_flagged():
+    """A peak that grazes just past α′ inside one step (both step ends below it, so the overturning
+    event sees no sign change) is an overturning: max_theta at the threshold with overturned False
+    was a contradiction of the run's own flags (quasi-rigid SM, a_p/(g tanα) 2.711408-2.711411 at
+    ω_p/p = 3, found by `find_boundary`); just below, the peak is under α′ and nothing is flagged."""
+    blk = Block.from_slenderness(10.0, 0.2)
+    for ratio, over in ((2.711407, False), (2.711409, True)):
+        s = _sim(SpringModel(blk), RickerPulse(*jaxrock.pulse_of_ratios(blk, ratio, 3.0)))
+        assert s.status == Status.ok and bool(s.overturned) == over and (float(s.max_theta) == 1.0) == over, (ratio, s.max_theta)
+        assert np.isfinite(float(s.t_overturn)) == over
+
+
 def test_energy_balance_flexible():
     blk = Block.from_size(20.0, 2.0)
     model = SpringModel(blk, Column.concrete(), n_elements=6)
