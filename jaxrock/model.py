@@ -242,8 +242,10 @@ class AbstractModel(eqx.Module):
     threshold: eqx.AbstractVar[Float[Array, ""]]  # overturned at |θ| ≥ threshold·α′
 
     @abc.abstractmethod
-    def default_integrator(self) -> AbstractIntegrator:
-        """The integrator used when `simulate` is given none."""
+    def default_integrator(self, autodiff: str = "reverse") -> AbstractIntegrator:
+        """The integrator used when `simulate` is given none; with `autodiff="forward"` the same
+        settings differentiated in forward mode (`jax.jvp`, `jax.jacfwd`: one pass per input, the
+        cheaper choice for one or a few parameters, e.g. `find_boundary`)."""
 
     @abc.abstractmethod
     def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> AbstractStepper:

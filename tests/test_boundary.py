@@ -1,8 +1,6 @@
 """Overturning boundaries by gradient (`jaxrock.analyses.boundary`) against bisection and central
 differences: the RM of a 10 m block, tanα = 0.2, under symmetric Ricker pulses."""
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -11,7 +9,7 @@ import pytest
 import jaxrock as jr
 
 BLOCK = jr.Block.from_slenderness(10.0, 0.2)
-FORWARD = jr.EventIntegrator(autodiff="forward")
+FORWARD = jr.RigidModel(BLOCK).default_integrator(autodiff="forward")
 A_GRID = np.arange(1.0, 8.0 + 1e-9, 0.5)
 BISECTIONS = 20
 
@@ -48,7 +46,7 @@ def test_find_boundary_quasi_rigid_spring_model():
     bisection takes 21. (Before grazing overturns were flagged, runs with max_theta = 1 and not
     overturned put the bisected line 4e-6 away from the margin's zero.)"""
     model = jr.SpringModel(BLOCK)
-    forward = dataclasses.replace(model.default_integrator(), autodiff="forward")
+    forward = model.default_integrator(autodiff="forward")
 
     def run(x):
         return jr.simulate(model, jr.RickerPulse(*jr.pulse_of_ratios(BLOCK, x, 3.0)), integrator=forward)

@@ -27,11 +27,10 @@ So m² is close to linear in any parameter near a boundary:
   `jax.vmap` it over boundary points (`notebooks/03_gradients.ipynb`, all ω_p/p of a spectrum's line
   in one batch).
 
-The runs must be forward-mode differentiable in x and p: the rigid model with
-`EventIntegrator(autodiff="forward")`; the quasi-rigid SM with its default's settings in forward mode,
-`dataclasses.replace(model.default_integrator(), autodiff="forward")` (a bare
-`SpringIntegrator(autodiff="forward")` has the class's looser defaults, another integrator: its
-boundary lies 4e-5 away); the flexible SM with its default (generalized-α is forward-mode).
+The runs must be forward-mode differentiable in x and p: a model's
+`default_integrator(autodiff="forward")` is its default's settings in forward mode (a bare
+`SpringIntegrator(autodiff="forward")` has the class's looser defaults: another integrator, whose
+boundary lies 4e-5 away on the quasi-rigid SM).
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from .._validate import JaxrockInputError, Limit, check_limits
 from ..bookkeeping import Watch
 from ..excitation import AbstractExcitation
 from ..geometry import G, Block
-from ..model import AbstractModel, AbstractSpringIntegrator
+from ..model import AbstractModel, AbstractSpringIntegrator, check_autodiff
 from ..scene import CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA
 from . import beam
 from .base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, as_backbone
@@ -100,7 +100,7 @@ class SpringModel(AbstractModel):
                 Limit("cbar (damper coefficient)", self.cbar, 0.0, math.inf, hi_open=True), *column)
 
     # -- AbstractModel --------------------------------------------------------------------------
-    def default_integrator(self) -> "SpringIntegrator | Checked":
+    def default_integrator(self, autodiff: str = "reverse") -> "SpringIntegrator | Checked":
         """The work–precision choice (`jaxrock work-precision`, `benchmarks/bench_spring.py`; the
         measured errors and costs, and the alternatives, are in the README, "Numerics and
         performance"):
@@ -113,11 +113,15 @@ class SpringModel(AbstractModel):
           its status is `inaccurate` where a companion run at 1e-4 differs by more (a stiff spring
           or column, where the local tolerance does not bound the global error: `jaxrock.spring.
           checked`); about twice an unchecked run's cost. Forward-mode differentiable; for
-          `jax.grad` through a flexible column, `SpringIntegrator()`, Kvaerno5 + Newton."""
+          `jax.grad` through a flexible column, `SpringIntegrator()`, Kvaerno5 + Newton.
+
+        `autodiff`: "reverse" or "forward" (`AbstractModel.default_integrator`); the flexible
+        default is forward-mode either way."""
+        check_autodiff(autodiff)
         if self.column is None:
             # 20,000 steps (the class default) ended the 40-s records of ../shared/data/records
             # (dt 0.005 s) in max_steps at every factor, the block at rest on its ringing spring
-            return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000)
+            return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000, autodiff=autodiff)
         return Checked(GeneralizedAlpha(rtol=1e-5, atol=1e-5))
 
     @property
