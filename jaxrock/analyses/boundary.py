@@ -30,7 +30,7 @@ So m² is close to linear in any parameter near a boundary:
 The runs must be forward-mode differentiable in x and p: a model's
 `default_integrator(autodiff="forward")` is its default's settings in forward mode (a bare
 `SpringIntegrator(autodiff="forward")` has the class's looser defaults: another integrator, whose
-boundary lies 4e-5 away on the quasi-rigid SM).
+boundary lies 3e-5 away on the quasi-rigid SM).
 """
 
 from __future__ import annotations
