@@ -292,6 +292,7 @@ class SpringSystem(eqx.Module):
     def history(self, t, y, excitation, fields):
         q, v = self.split(y)
         theta, theta_dot = q[0], v[0]
+        work = dict(zip(WORK_FIELDS, y[2 * self.ndof :])) if self.track_energy else {}
         out = {}
         for name in fields:
             if name == "theta":
@@ -315,9 +316,9 @@ class SpringSystem(eqx.Module):
             elif name == "elastic":
                 out[name] = self.elastic(q)
             elif name == "dissipated":
-                out[name] = y[-3] + y[-2]
+                out[name] = work["damper"] + work["rayleigh"]
             elif name in WORK_FIELDS:
-                out[name] = y[2 * self.ndof + WORK_FIELDS.index(name)]
+                out[name] = work[name]
         return out
 
 
