@@ -5,8 +5,7 @@ would script it.
 
     python benchmarks/bench_suite.py [--refine 5]
 
-Suite: El Centro 1940 NS and, where ../shared/data/records is present, ARL360 (Northridge) and
-elCentro_peknold; 2h = 1, 4 m; tanα = 0.2; factors 0.25:4:16. Both peers run the same sweep and
+Suite: the packaged El Centro 1940 NS, ARL360 (Northridge) and elCentro_peknold; 2h = 1, 4 m; tanα = 0.2; factors 0.25:4:16. Both peers run the same sweep and
 the same bisection (the first overturning factor of the sweep, bisected `refine` times against
 the one before it). jaxrock: the first call (with compilation, cache off) and the best of 2 warm
 calls; SciPy at its tuned setting of bench_rigid (DOP853 rtol 1e-6, max error in θ/α ≤ 1e-6 on
@@ -30,7 +29,6 @@ HERE = Path(__file__).resolve().parent
 import jaxrock as jr  # noqa: E402
 from jaxrock.numerics import scipy_rigid as sr  # noqa: E402
 
-SHARED = HERE.parent.parent / "shared" / "data" / "records"
 LINES: list[str] = []
 
 
@@ -60,8 +58,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--refine", type=int, default=5)
     args = ap.parse_args()
-    names = [SHARED / n for n in ("ARL360.at2", "elCentro_peknold.AT2")] if SHARED.is_dir() else []
-    records = jr.read_records([*names, "elcentro"])
+    records = jr.read_records(["arl360", "elcentro_peknold", "elcentro"])
     heights, tan_a, scales = [1.0, 4.0], 0.2, np.linspace(0.25, 4.0, 16)
     out(f"# bench_suite: {len(records)} records × {len(heights)} sizes, tanα = {tan_a}, factors 0.25:4:16, refine {args.refine}, RM")
     out(f"# machine: {platform.machine()} {os.cpu_count()} CPUs; jaxrock compilation cache off")

@@ -39,7 +39,7 @@ _EXPORTS = {
     **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
     **dict.fromkeys(["SpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear",
                      "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
-    **dict.fromkeys(["el_centro", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
+    **dict.fromkeys(["el_centro", "builtin_record", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",
     **dict.fromkeys(["record_measures", "suite_measures"], "intensity"),
     "fit_lognormal": "analyses.fragility",

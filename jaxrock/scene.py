@@ -9,7 +9,8 @@ arguments from it before JAX is loaded, and the classes it names are imported wh
   each damping parameter that dissipates nothing; `MODEL_PARAMETERS`, the numeric model parameters.
 - Pulse kinds: `PULSES` (name → excitation class of `jaxrock.excitation`, `pulse_class`); a new
   pulse kind is a class there and a line here. `DEFAULT_PULSE`.
-- Records: `RECORD_ALIASES`, the names of the packaged El Centro 1940 NS record.
+- Records: `RECORD_ALIASES`, the names of the packaged El Centro 1940 NS record; `PACKAGED_RECORDS`, the
+  other packaged records; `BUILTIN_SUITE`, the name of all of them together.
 - Geometry: `TAN_ALPHA_MIN` and `check_slenderness`, the valid height and slenderness of a block.
 - Spring backbones: `BACKBONES` (name → class of `jaxrock.spring.base_spring`), `DEFAULT_BACKBONE`,
   `DEFAULT_SMOOTHING`.
@@ -91,6 +92,10 @@ def takes(parameter: str) -> tuple[str, ...]:
 PULSES: dict[str, str | Callable] = {"symmetric": "RickerPulse", "antisymmetric": "AntisymmetricRickerPulse"}
 DEFAULT_PULSE = "symmetric"
 RECORD_ALIASES = ("elcentro", "el-centro", "el_centro")  # the packaged El Centro 1940 NS (`jaxrock.el_centro`)
+# the other packaged records (jaxrock/data/records; sources in jaxrock/data/README.md): name → file
+PACKAGED_RECORDS = {"elcentro_peknold": "elCentro_peknold.AT2", "arl360": "ARL360.at2", "b-elc000": "B-ELC000.AT2",
+                    "a-tin000": "A-TIN000.AT2"}
+BUILTIN_SUITE = "builtin"  # a suite of every packaged record (`jaxrock.read_records`)
 
 
 def pulse_class(pulse) -> type:
@@ -104,7 +109,14 @@ def pulse_class(pulse) -> type:
 
 
 def is_builtin_record(name: str) -> bool:
-    return name.strip().lower() in RECORD_ALIASES
+    """Whether `name` names one packaged record (`RECORD_ALIASES`, `PACKAGED_RECORDS`; any case)."""
+    key = name.strip().lower()
+    return key in RECORD_ALIASES or key in PACKAGED_RECORDS
+
+
+def builtin_record_names() -> str:
+    """The packaged records' names, for messages."""
+    return ", ".join([RECORD_ALIASES[0], *PACKAGED_RECORDS])
 
 
 # -- geometry --------------------------------------------------------------------------------------

@@ -7,14 +7,12 @@ import numpy as np
 import pytest
 
 from jaxrock import G, JaxrockInputError
-from jaxrock.io.records import el_centro, read_at2, read_record, read_two_column
+from jaxrock.io.records import builtin_record, el_centro, read_at2, read_record, read_records, read_two_column
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
-needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason=f"shared data folder {SHARED} is absent")
 PACKAGE_DATA = Path(__file__).resolve().parents[1] / "jaxrock" / "data"
 
-# file -> (NPTS, DT [s], PGA [g] from /work/shared/data/README.md or None where it gives none)
-SHARED_FILES = {
+# packaged file -> (NPTS, DT [s], PGA [g] from jaxrock/data/README.md or None where it gives none)
+PACKAGED_FILES = {
     "IELC180.AT2": (4000, 0.01, 0.3129),
     "elcentro_ns_1940.txt": (4000, 0.01, 0.3129),
     "records/elCentro_peknold.AT2": (1559, 0.02, 0.3188),
@@ -37,11 +35,10 @@ def _naive_at2_values(path: Path) -> np.ndarray:
 # --- real files ---------------------------------------------------------------------------------
 
 
-@needs_shared
-@pytest.mark.parametrize("rel", sorted(SHARED_FILES))
-def test_shared_files_parse(rel):
-    npts, dt, pga = SHARED_FILES[rel]
-    path = SHARED / rel
+@pytest.mark.parametrize("rel", sorted(PACKAGED_FILES))
+def test_packaged_files_parse(rel):
+    npts, dt, pga = PACKAGED_FILES[rel]
+    path = PACKAGE_DATA / rel
     rec = read_record(path)
     assert rec.n == npts
     assert float(rec.dt) == pytest.approx(dt, rel=1e-12)
@@ -54,19 +51,22 @@ def test_shared_files_parse(rel):
         assert rec.name == _raw_lines(path)[1].strip()
 
 
-@needs_shared
-def test_every_shared_record_is_checked():
-    """Every file in shared/data/records (the real header variants) is in SHARED_FILES."""
-    present = {f"records/{p.name}" for p in (SHARED / "records").iterdir() if p.is_file() and p.suffix.lower() != ".md"}
-    assert present <= set(SHARED_FILES), present - set(SHARED_FILES)
+def test_every_packaged_record_is_checked_and_named():
+    """Every packaged record file (the real header variants) is in PACKAGED_FILES, is reachable by
+    its name (`builtin_record`, the same values as reading its file) and is in the `builtin` suite."""
+    from jaxrock.scene import PACKAGED_RECORDS
 
-
-@needs_shared
-def test_shared_el_centro_formats_agree():
-    at2 = read_at2(SHARED / "IELC180.AT2")
-    txt = read_two_column(SHARED / "elcentro_ns_1940.txt")
-    np.testing.assert_array_equal(at2.acc, txt.acc)
-    np.testing.assert_array_equal(el_centro().acc, at2.acc)
+    present = {f"records/{p.name}" for p in (PACKAGE_DATA / "records").iterdir() if p.is_file()}
+    assert present == {f"records/{f}" for f in PACKAGED_RECORDS.values()} and present <= set(PACKAGED_FILES)
+    suite = read_records(["builtin"])
+    assert [r.name for r in suite] == ["El Centro 1940 NS", *(Path(f).stem for f in PACKAGED_RECORDS.values())]
+    for name, file in PACKAGED_RECORDS.items():
+        by_name = builtin_record(name.upper())
+        np.testing.assert_array_equal(by_name.acc, read_record(PACKAGE_DATA / "records" / file).acc)
+        assert by_name.name == Path(file).stem and float(by_name.dt) == float(read_record(PACKAGE_DATA / "records" / file).dt)
+    np.testing.assert_array_equal(builtin_record("El-Centro").acc, el_centro().acc)
+    with pytest.raises(JaxrockInputError, match="not a packaged record; valid: elcentro"):
+        builtin_record("ARL361")
 
 
 def test_packaged_el_centro():
@@ -87,10 +87,7 @@ def test_packaged_el_centro():
 
 
 def _records():
-    recs = [el_centro()]
-    if SHARED.is_dir():
-        recs += [read_record(SHARED / rel) for rel in sorted(SHARED_FILES) if rel.startswith("records/")]
-    return recs
+    return read_records(["builtin"])
 
 
 def test_record_interpolates_exactly_at_samples():

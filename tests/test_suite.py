@@ -13,8 +13,7 @@ from jaxrock.analyses import fragility
 from jaxrock import G
 from jaxrock.results import STATUS_NAMES
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
-needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason=f"shared data folder {SHARED} is absent")
+RECORDS = Path(jr.__file__).parent / "data" / "records"  # the packaged records (jaxrock/data/README.md)
 
 
 def _naive_at2_g(path: Path) -> np.ndarray:
@@ -23,10 +22,9 @@ def _naive_at2_g(path: Path) -> np.ndarray:
 
 
 # -- intensity measures ------------------------------------------------------------------------------
-@needs_shared
 @pytest.mark.parametrize("name", ["A-TIN000.AT2", "ARL360.at2", "B-ELC000.AT2", "elCentro_peknold.AT2"])
 def test_measures_match_independent_computation(name):
-    path = SHARED / "records" / name
+    path = RECORDS / name
     rec = jr.read_record(path)
     m = jr.record_measures(rec)
     acc = _naive_at2_g(path) * G
@@ -61,8 +59,7 @@ def test_measures_scale_with_the_record():
 
 # -- least overturning scale -------------------------------------------------------------------------
 def _records(*names):
-    shared = [SHARED / "records" / n for n in names] if SHARED.is_dir() else []
-    return jr.read_records([*shared, "elcentro"])
+    return jr.read_records([*names, "elcentro"])
 
 
 def test_least_scale_brackets_and_flags():
@@ -71,7 +68,7 @@ def test_least_scale_brackets_and_flags():
     overturning interval; `windows` counts the sweep's own turns back to standing."""
     from jaxrock.analyses.sweep import run_values
 
-    records = _records("ARL360.at2")
+    records = _records("arl360")
     coarse = np.linspace(0.25, 4.0, 16)
     sweep = jr.Sweep.make("rigid", records=records, height=[1.0, 4.0], tan_alpha=0.2, scale=coarse)
     ds = jr.least_overturning_scale(sweep, refine=6, progress=False)
@@ -114,7 +111,7 @@ def test_least_scale_equals_brute_force_scan_of_its_bracket():
     0.72 at step 0.0025 the outcome of ARL360 on a 0.5-m column, tanα = 0.15, turns 14 times.)"""
     from jaxrock.analyses.sweep import run_values
 
-    records = _records("ARL360.at2")
+    records = _records("arl360")
     coarse = np.linspace(0.25, 4.0, 16)
     sweep = jr.Sweep.make("rigid", records=records, height=[0.5, 1.0], tan_alpha=0.15, scale=coarse)
     refine = 5
@@ -215,7 +212,7 @@ def test_suite_command_writes_the_dataset_tables_and_figures(tmp_path):
 
     from helpers import invoke, read_csv
 
-    recs = [str(SHARED / "records" / "ARL360.at2")] if SHARED.is_dir() else []
+    recs = ["arl360"]
     args = ("suite", *recs, "elcentro", "--model", "rigid", "--height", "1,4", "--scale", "0.5:3:6", "--refine", "3",
             "--boot", "50", "--out", tmp_path / "s", "-q")
     r = invoke(*args)
@@ -270,7 +267,6 @@ def test_a_list_file_names_a_suite(tmp_path):
         jr.read_records([tmp_path / "bad.list"])
 
 
-@needs_shared
 def test_interrupted_suite_resumes_to_the_same_numbers(tmp_path):
     """A real `jaxrock suite` process stopped by SIGINT after its first record's chunk (in the sweep
     or, warm, already in the bisection): exit 130, what the store keeps and the resume command; the
@@ -281,7 +277,7 @@ def test_interrupted_suite_resumes_to_the_same_numbers(tmp_path):
 
     from helpers import Watch, jaxrock_process
 
-    args = ("suite", SHARED / "records" / "ARL360.at2", SHARED / "records" / "elCentro_peknold.AT2", "elcentro", "--model", "rigid",
+    args = ("suite", "arl360", "elcentro_peknold", "elcentro", "--model", "rigid",
             "--height", "1,4", "--scale", "0.25:4:16", "--refine", "3", "--boot", "20")
     whole = jaxrock_process(*args, "--out", tmp_path / "whole", "-q", cwd=tmp_path)
     assert whole.wait(300) == 0, whole.stderr.read()

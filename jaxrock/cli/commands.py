@@ -15,8 +15,8 @@ from . import guards
 from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untrusted, _guarded,
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
-from ..scene import (DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MODEL_PARAMETERS, PULSES, RECORD_ALIASES,
-                     UNDAMPED, model_kinds, parameter_help)
+from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MODEL_PARAMETERS, PULSES, RECORD_ALIASES,
+                     UNDAMPED, builtin_record_names, model_kinds, parameter_help)
 from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model,
                       parse_values, solution_summary, spectrum_summary)
 
@@ -122,7 +122,7 @@ def simulate(
     accel_ratio: Optional[float] = typer.Option(None, help="pulse amplitude as a_p/(g tanα) (default 4)"),
     omega_p: Optional[float] = typer.Option(None, help="pulse frequency [rad/s] (default 2π)"),
     omega_ratio: Optional[float] = typer.Option(None, help="pulse frequency as ω_p/p"),
-    record: Optional[str] = typer.Option(None, help=f"a record file (.AT2 or two-column) or '{RECORD_ALIASES[0]}', instead of a pulse"),
+    record: Optional[str] = typer.Option(None, help=f"a record file (.AT2 or two-column) or a packaged record ({builtin_record_names()}), instead of a pulse"),
     scale: float = typer.Option(1.0, help="factor on the record"),
     units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
                                  "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
@@ -236,7 +236,7 @@ def batch(
 @app.command("record-spectrum")
 @_guarded
 def record_spectrum(
-    record: str = typer.Option(RECORD_ALIASES[0], help=f"record file (.AT2 or two-column text), or '{RECORD_ALIASES[0]}' (packaged El Centro 1940 NS)"),
+    record: str = typer.Option(RECORD_ALIASES[0], help=f"record file (.AT2 or two-column text), or a packaged record ({builtin_record_names()})"),
     model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′"),
@@ -301,7 +301,7 @@ def sweep(
     accel_ratio: Optional[str] = typer.Option(None, help=f"a_p/(g tanα′): {_LIST} (pulse sweeps; default 0.5:10:48)"),
     omega_ratio: Optional[str] = typer.Option(None, help=f"ω_p/p′: {_LIST} (pulse sweeps; default 1:15:48)"),
     records: Optional[str] = typer.Option(None, help="a record sweep instead of pulses: record files, folders of records (.AT2, "
-                                          f".txt, .dat, .csv) or '{RECORD_ALIASES[1]}', separated by commas"),
+                                          f".txt, .dat, .csv), packaged records ({builtin_record_names()}) or '{BUILTIN_SUITE}' (all of them), separated by commas"),
     units: Optional[str] = typer.Option(None, help="acceleration units of two-column record files (default g)"),
     scale: Optional[str] = typer.Option(None, help=f"record factor: {_LIST} (record sweeps; default 1)"),
     height: str = typer.Option("10", help=f"full height 2h [m]: {_LIST}"),
@@ -416,7 +416,7 @@ def sweep(
 @_guarded
 def suite(
     records: Optional[list[str]] = typer.Argument(None, help="record files, folders of records (.AT2, .txt, .dat, .csv), list files (.list: one per line) and "
-                                                  f"'{RECORD_ALIASES[1]}' (the packaged El Centro 1940 NS); default: '{RECORD_ALIASES[1]}'"),
+                                                  f"packaged records ({builtin_record_names()}) or '{BUILTIN_SUITE}' (all five); default: '{RECORD_ALIASES[1]}'"),
     model: str = typer.Option("rigid,spring,spring-flexible", help=f"model kinds, comma-separated ({', '.join(model_kinds())}): "
                               "each runs the same suite"),
     height: str = typer.Option("1,2,4,8", help=f"full height 2h [m]: {_LIST}"),

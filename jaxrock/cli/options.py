@@ -156,17 +156,18 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
             if v is not None:
                 raise JaxrockInputError(f"{name} applies to Ricker pulses, not to --record")
         check_range("--scale", scale, 0.0, math.inf, hi_open=True)
-        if is_builtin_record(record):
-            from ..io.records import el_centro
+        if is_builtin_record(record) and not Path(record).exists():
+            from ..io.records import builtin_record
 
             if units is not None:
-                raise JaxrockInputError("--units applies to --record files; the packaged El Centro record needs none")
-            rec = el_centro()
+                raise JaxrockInputError(f"--units applies to --record files; the packaged record {record} needs none")
+            rec = builtin_record(record)
         else:
             from ..io.records import read_record
+            from ..scene import builtin_record_names
 
             if not Path(record).is_file():
-                raise JaxrockInputError(f"--record {record}: file not found")
+                raise JaxrockInputError(f"--record {record}: file not found, nor a packaged record ({builtin_record_names()})")
             rec = read_record(record) if units is None else read_record(record, units=units)
         return rec.scaled(scale), f"{rec.name} × {scale:g}"
     if units is not None:

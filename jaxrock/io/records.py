@@ -22,6 +22,7 @@ import numpy as np
 from .._validate import JaxrockInputError, is_number
 from ..excitation import Record
 from ..geometry import G
+from ..scene import builtin_record_names
 
 _UNITS = {"g": G, "m/s2": 1.0, "cm/s2": 0.01, "mm/s2": 1e-3, "in/s2": 0.0254, "ft/s2": 0.3048}  # factor to m/s²
 _UNITS_VALID = "g, m/s2, cm/s2 (gal), mm/s2, in/s2, ft/s2 (also written m/s/s, m/sec^2, m/s²)"
@@ -245,37 +246,47 @@ RECORD_SUFFIXES = (".at2", ".txt", ".dat", ".csv")  # the files of a record fold
 LIST_SUFFIX = ".list"  # a suite's list file (`read_records`)
 
 
-def _list_entries(path: Path) -> list[str]:
-    """The sources a list file names: one per line (a record file, a folder or an El Centro alias;
-    relative paths from the list file's folder), blank lines and `#` comments skipped."""
-    from ..scene import is_builtin_record
+def _builtin(entry: str, base: Path) -> bool:
+    """Whether a suite's source names packaged records (one of them, or `BUILTIN_SUITE`): a file or
+    folder of that name, relative to `base`, is read instead."""
+    from ..scene import BUILTIN_SUITE, is_builtin_record
 
+    return (is_builtin_record(entry) or entry.strip().lower() == BUILTIN_SUITE) and not (base / entry).exists()
+
+
+def _list_entries(path: Path) -> list[str]:
+    """The sources a list file names: one per line (a record file, a folder or a packaged record's
+    name; relative paths from the list file's folder), blank lines and `#` comments skipped."""
     entries = []
     for lineno, line in enumerate(_read_lines(path), start=1):
         entry = line.split("#", 1)[0].strip()
         if not entry:
             continue
-        if not is_builtin_record(entry) and not (path.parent / entry).exists():
-            raise JaxrockInputError(f"{path}: line {lineno}: {entry}: no such file or folder (relative to {path.parent})")
-        entries.append(entry if is_builtin_record(entry) else str(path.parent / entry))
+        builtin = _builtin(entry, path.parent)
+        if not builtin and not (path.parent / entry).exists():
+            raise JaxrockInputError(f"{path}: line {lineno}: {entry}: no such file or folder (relative to {path.parent}) "
+                                    "nor a packaged record")
+        entries.append(entry if builtin else str(path.parent / entry))
     if not entries:
-        raise JaxrockInputError(f"{path}: the list names no record; expected one record file, folder or 'elcentro' per line")
+        raise JaxrockInputError(f"{path}: the list names no record; expected one record file, folder or packaged record per line")
     return entries
 
 
 def read_records(sources, *, units: str | None = None) -> list[Record]:
     """Records for a suite: each source is a record file, a folder (its files ending in one of
     `RECORD_SUFFIXES`, any case, sorted by name), a list file (`*.list`: one such source per line,
-    relative to the list's folder, `#` comments) or an alias of the packaged El Centro record
-    (`jaxrock.scene.RECORD_ALIASES`). Files are read by `read_record` and named by their file stem
+    relative to the list's folder, `#` comments), a packaged record's name (`builtin_record`) or
+    `builtin`, all five packaged records (El Centro first); a file or folder of such a name in the
+    working directory is read instead. Files are read by `read_record` and named by their file stem
     (unique within a folder); `units` as there. A folder without record files, a missing file or
     two records of one name is refused in one line."""
-    from ..scene import is_builtin_record
+    from ..scene import BUILTIN_SUITE, PACKAGED_RECORDS, RECORD_ALIASES
 
     out: list[Record] = []
     for src in [sources] if isinstance(sources, (str, os.PathLike)) else list(sources):
-        if is_builtin_record(str(src)):
-            out.append(el_centro())
+        if _builtin(str(src), Path(".")):
+            suite = str(src).strip().lower() == BUILTIN_SUITE
+            out += [builtin_record(n) for n in (RECORD_ALIASES[0], *PACKAGED_RECORDS)] if suite else [builtin_record(str(src))]
             continue
         path = Path(src)
         if path.is_file() and path.suffix.lower() == LIST_SUFFIX:
@@ -288,13 +299,30 @@ def read_records(sources, *, units: str | None = None) -> list[Record]:
         elif path.is_file():
             files = [path]
         else:
-            raise JaxrockInputError(f"records: {path}: no such file or folder")
+            raise JaxrockInputError(f"records: {path}: no such file or folder, nor a packaged record ({BUILTIN_SUITE} or one of "
+                                    f"{builtin_record_names()})")
         out += [read_record(f, name=f.stem, **({} if units is None else {"units": units})) for f in files]
     names = [r.name for r in out]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise JaxrockInputError(f"records: two records named {twice[0]!r}; rename one file")
     return out
+
+
+def builtin_record(name: str, *, label: str | None = None) -> Record:
+    """A packaged record by name, any case (`jaxrock/data/README.md`: sources and attribution):
+    `elcentro` (El Centro 1940 NS, `el_centro`), `elcentro_peknold`, `arl360`, `b-elc000`,
+    `a-tin000`. Named by its file stem, or `label`."""
+    from ..scene import PACKAGED_RECORDS, RECORD_ALIASES
+
+    key = name.strip().lower()
+    if key in RECORD_ALIASES:
+        return el_centro()
+    if key not in PACKAGED_RECORDS:
+        raise JaxrockInputError(f"record {name!r} is not a packaged record; valid: {builtin_record_names()}")
+    file = PACKAGED_RECORDS[key]
+    with resources.as_file(resources.files("jaxrock") / "data" / "records" / file) as path:
+        return read_at2(path, name=label or Path(file).stem)
 
 
 def el_centro() -> Record:

@@ -59,7 +59,7 @@ from .._validate import JaxrockInputError, check_range, in_range, is_number, wit
 from ..excitation import Record
 from ..geometry import G, Block, pulse_of_ratios
 from ..scene import (CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA, DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, MODEL_PARAMETERS, PULSES,
-                     RECORD_ALIASES, TAN_ALPHA_MIN, is_builtin_record, model_kinds, parameter_table, parameters, pulse_class, takes)
+                     RECORD_ALIASES, TAN_ALPHA_MIN, builtin_record_names, is_builtin_record, model_kinds, parameter_table, parameters, pulse_class, takes)
 from ..results import RESULT_COLUMNS, summary_doc
 from .tables import csv_text
 
@@ -135,17 +135,19 @@ class _Table:
 
 
 def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
-    from .records import el_centro, read_record
+    from .records import builtin_record, read_record
 
-    if is_builtin_record(text):
-        if "elcentro" not in cache:
-            cache["elcentro"] = el_centro()
-        return cache["elcentro"]
     candidates = [base / text, Path(text)]
     path = next((p for p in candidates if p.is_file()), None)
+    if path is None and is_builtin_record(text):
+        key = text.strip().lower()
+        key = RECORD_ALIASES[0] if key in RECORD_ALIASES else key
+        if key not in cache:
+            cache[key] = builtin_record(key)
+        return cache[key]
     if path is None:
         fail(
-            f"{text!r} is neither a pulse ({', '.join(PULSES)}), '{RECORD_ALIASES[0]}' nor a record file "
+            f"{text!r} is neither a pulse ({', '.join(PULSES)}), a packaged record ({builtin_record_names()}) nor a record file "
             f"(looked in {base} and the working directory)"
         )
     path = path.resolve()

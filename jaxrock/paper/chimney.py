@@ -15,7 +15,6 @@ rotational masses and the mesh. Each variant runs the rocking and the fixed-base
 from __future__ import annotations
 
 import math
-from importlib import resources
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -23,7 +22,7 @@ import numpy as np
 
 from ..excitation import Record
 from ..geometry import Block
-from ..io.records import el_centro, read_at2
+from ..io.records import builtin_record, el_centro
 from ..model import simulate
 from ..plotting import plot_history
 from ..results import Save, status_names
@@ -38,9 +37,8 @@ PAPER = {"rocking": 7327.0, "fixed": 33200.0, "rotation": 0.027}
 def peknold() -> Record:
     """El Centro 1940 NS, the older "Peknold version" (1559 points at 0.02 s, PGA 0.3188 g), from
     the OpenSees repository (`EXAMPLES/ExampleScripts/elCentro.AT2`), shipped as
-    `jaxrock/data/elCentro_peknold.AT2`."""
-    with resources.as_file(resources.files("jaxrock") / "data" / "elCentro_peknold.AT2") as path:
-        return read_at2(path, name="El Centro 1940 NS (Peknold)")
+    `jaxrock/data/records/elCentro_peknold.AT2`."""
+    return builtin_record("elcentro_peknold", label="El Centro 1940 NS (Peknold)")
 
 
 def chimney(*, rho_factor=1.0, E_factor=1.0, zeta=0.01, n_elements=10, added_masses=True, fixed_base=False) -> SpringModel:

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from .findings import NOT_REPRODUCED, REPRODUCED, VERDICTS, Finding
+from .reported import REPORTED
 
 
 @dataclass(frozen=True)
@@ -157,8 +158,9 @@ def write_report(report: Report, out: Path) -> dict[str, Path]:
     by_name = {s.name: s for s in STEPS}
     for name, fs in report.findings.items():
         step = by_name[name]
-        lines += ["", f"## {step.title}", "", f"{report.seconds[name]:.1f} s; "
-                  + ", ".join(f"{f.verdict}: {f.quantity}" for f in fs) + "."]
+        lines += ["", f"## {step.title}", ""]
+        lines += [f"The paper reports (figure {r.figures}; {r.scene}): {r.reported}." for r in REPORTED if r.step == name]
+        lines += ["", f"{report.seconds[name]:.1f} s; " + ", ".join(f"{f.verdict}: {f.quantity}" for f in fs) + "."]
         for prefix in step.files or (name,):
             for extra in sorted(out.glob(f"{prefix}*.md")):
                 lines += ["", extra.read_text(encoding="utf-8").replace("# ", "### ", 1).strip()]

@@ -119,7 +119,7 @@ class SpringModel(AbstractModel):
         default is forward-mode either way."""
         check_autodiff(autodiff)
         if self.column is None:
-            # 20,000 steps (the class default) ended the 40-s records of ../shared/data/records
+            # 20,000 steps (the class default) ended the 40-s packaged records B-ELC000 and A-TIN000
             # (dt 0.005 s) in max_steps at every factor, the block at rest on its ringing spring
             return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000, autodiff=autodiff)
         return Checked(GeneralizedAlpha(rtol=1e-5, atol=1e-5))
