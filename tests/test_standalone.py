@@ -37,3 +37,24 @@ def test_the_scan_sees_the_repository():
     assert {"README.md", "pyproject.toml", "jaxrock/__init__.py", "tests/conftest.py", ".ci/run"} <= seen
     assert any(s.startswith("notebooks/") and s.endswith(".ipynb") for s in seen)
     assert OUTSIDE.search("see ../shared/SPEC.md") and OUTSIDE.search("/work/main/x") and not OUTSIDE.search("jaxrock/data/records")
+
+
+def test_readme_commands_are_the_ones_ci_runs():
+    """The README's first screen gives two commands (install + the main job on its default, install +
+    the tests); .ci/run runs exactly those, verbatim, in a copy with nothing beside it, checks the
+    first one's files, and then the slow set and the notebooks."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("readme_commands", ROOT / ".ci" / "readme_commands.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    run, test = module.commands(readme)
+    assert readme.index("```bash") < 1200, "the commands are on the README's first screen"
+    assert "pip install -e ." in run and run.endswith("jaxrock spectrum")
+    assert "pip install -e '.[test]'" in test and test.endswith("python -m pytest -q")
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    for needle in ('.ci/readme_commands.py', 'bash -c "${CMDS[0]}"', 'bash -c "${CMDS[1]}"', "out/spectrum.nc out/spectrum.png",
+                   "-m slow", "--nbmake notebooks/"):
+        assert needle in ci, needle
+    assert "-m 'not slow'" in (ROOT / "pyproject.toml").read_text(encoding="utf-8")  # the README's command runs the default set
