@@ -124,9 +124,12 @@ def assert_summary_matches_history(s: jr.Solution, h: jr.Solution, theta_tol: fl
 
 
 # rigid: both runs take the same steps until the end of the excitation; after it the summary uses
-# the closed-form next peak, the history the located apex (1e-9 of α′). t_overturn: root finds
-# (1e-13 s) on trajectories that differ by the step control (~1e-10 rad).
-RIGID_TOL = dict(theta_tol=1e-9, t_tol=1e-7)
+# the closed-form next peak, the history the located apex (1e-9 of α′) on a trajectory that differs
+# by the step control: over the 4320 random scenes of both tests up to 4.5e-9 of α′ (1e-9 held on
+# the default run's 160 but failed 7 of the 26 slow batches, 1.1e-9 to 4.5e-9), so 1e-8, the
+# default rtol. t_overturn: root finds (1e-13 s) on trajectories that differ by the step control
+# (~1e-10 rad).
+RIGID_TOL = dict(theta_tol=1e-8, t_tol=1e-7)
 # quasi-rigid SM: the summary restarts its steps at the end of the excitation; Tsit5 at 1e-10
 # (measured: 1e-8 on the default scenes)
 SPRING_TOL = dict(theta_tol=1e-7, t_tol=1e-6)
