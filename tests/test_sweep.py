@@ -149,6 +149,40 @@ def test_store_of_another_sweep_or_garbled_is_refused(tmp_path):
     assert r.exit_code == 2 and "is unreadable or not a jaxrock sweep" in r.output and len(r.output.strip().splitlines()) == 1
 
 
+DAMAGE_SWEEP = ["sweep", "--accel-ratio", "1:8:4", "--omega-ratio", "2:10:4", "--height", "5,10", "--chunk-size", "8", "-q"]
+
+
+@pytest.mark.parametrize("damage", ["remove max_theta", "remove overturned", "flip a byte of max_theta", "remove a flag"])
+def test_a_damaged_store_is_named_and_its_chunk_run_again(tmp_path, damage):
+    """Issue 52: with one chunk file of a finished store removed, a resume said "0 run … 32 were in the
+    store already" and kept 8 NaN max_theta with status ok (or overturned all False, "6 scenes" for
+    10). Now every chunk file has a CRC-32C and a file even when it equals the fill value: the
+    damaged chunk is named with its variable and file, run again and counted as run, and the store
+    ends equal to the undamaged one bit for bit."""
+    store = tmp_path / "s.zarr"
+    r = invoke(*DAMAGE_SWEEP, "--store", store)
+    assert r.exit_code == 0, r.output
+    whole = xr.open_zarr(store, chunks=None).load()
+    what = damage.split()[-1]
+    chunk_file = sorted((store / ("chunk_done" if what == "flag" else what) / "c").rglob("*"))
+    chunk_file = [f for f in chunk_file if f.is_file()][1]
+    if damage.startswith("flip"):
+        data = bytearray(chunk_file.read_bytes())
+        data[len(data) // 2] ^= 0x10
+        chunk_file.write_bytes(bytes(data))
+    else:
+        chunk_file.unlink()
+    r = invoke(*DAMAGE_SWEEP, "--store", store)
+    assert r.exit_code == 0, r.output
+    assert "8 run in" in r.output and "(24 were in the store already)" in r.output, r.output
+    if what != "flag":
+        key = chunk_file.relative_to(store).as_posix()
+        assert f"chunk 1 is damaged ({what}: chunk file {key} is " in r.output, r.output
+    _same(xr.open_zarr(store, chunks=None).load(), whole)
+    r = invoke(*DAMAGE_SWEEP, "--store", store)
+    assert "0 run in" in r.output and "is damaged" not in r.output, r.output
+
+
 _SHARDED = textwrap.dedent("""
     import jax, numpy as np
     import jaxrock as jr

@@ -23,6 +23,7 @@ import dataclasses
 import functools
 import math
 import os
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Callable, Iterable
@@ -394,7 +395,13 @@ def _run(sweep, store, client, devices, progress, on_chunk):
     from .. import interrupt
     from ..io import store as zstore
 
-    done = zstore.finished(store, sweep) if store is not None else set()
+    done = set()
+    if store is not None:
+        done, damaged = zstore.survey(store, sweep)
+        if damaged:
+            zstore.unflag(store, damaged)  # a rerun cut short leaves them to run again, never as done
+            for k, why in damaged.items():
+                print(f"store {store}: chunk {k} is damaged ({why}); running it again", file=sys.stderr)
     todo = [k for k in range(sweep.n_chunks) if k not in done]
     held = {}
     bar = tqdm(total=sweep.size, initial=sweep.size - sum(sweep.chunk_scenes(k) for k in todo), unit="scene", desc="sweep",

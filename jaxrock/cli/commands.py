@@ -390,11 +390,16 @@ def sweep(
     from ..interrupt import Interrupted
     from ..io import store as zstore
 
-    before = zstore.kept_scenes(store) if store.is_dir() else 0  # a resumed run: what the store held
+    ran = 0
+
+    def count(k):  # the scenes this run ran (a resumed store's damaged chunks included)
+        nonlocal ran
+        ran += sw.chunk_scenes(k)
+
     t0 = time.perf_counter()
     try:
         ds = run_sweep(sw, store, client=client, devices=devs, progress=not quiet,
-                       history=_history())
+                       history=_history(), on_chunk=count)
     except Interrupted:
         kept = len(zstore.finished(store, sw)) if store.exists() else 0
         typer.echo(f"interrupted: {kept} of {sw.n_chunks} chunks kept in {store}; resume with: {_resume_command()}", err=True)
@@ -402,7 +407,7 @@ def sweep(
     seconds = time.perf_counter() - t0
     dims = " × ".join(f"{len(v)} {k}" for k, v in sw.axes.items())
     where = f"Dask cluster {scheduler}" if scheduler else f"{len(devs)} device(s)"
-    ran = sw.size - before
+    before = sw.size - ran
     resumed = f" ({before:,} were in the store already)" if before else ""
     typer.echo(f"sweep: {sw.model} model, {dims} = {sw.size:,} scenes in {sw.n_chunks} chunk(s) of ≤ {math.prod(sw.chunk_shape):,}; "
                f"{ran:,} run in {seconds:.1f} s ({ran / seconds:,.0f} scenes/s with compilation) on {where}{resumed}")

@@ -9,6 +9,9 @@ Layout (open it with `xarray.open_zarr(path)`, or `load`):
   file atomically (a temporary renamed), and a chunk counts as finished only once its flag is
   written after its outputs: a run killed at any moment leaves finished chunks and chunks that a
   rerun runs again whole, never half a chunk;
+- every chunk file carries a CRC-32C of its bytes, and a finished chunk has a file for every
+  output (even one equal to the fill value): on resume a flagged chunk whose file is missing or
+  fails its checksum is damaged, said so by name, and run again (`survey`), never kept as done;
 - attributes: how the store was made (`Sweep.attrs`: every fixed value, the integrator, the versions;
   `made_by`, the full description; `history`, the command). A run into a store made by another
   description (or an unreadable store) is refused with one line.
@@ -24,6 +27,8 @@ import os
 import shutil
 import warnings
 from pathlib import Path
+
+from typing import NamedTuple
 
 import numpy as np
 
@@ -81,9 +86,11 @@ def open_for(path, sweep, history: str | None = None) -> None:
     attrs = {**sweep.attrs(), **({"history": history} if history else {})}
     xr.Dataset(coords=_coordinates(sweep), attrs=attrs).to_zarr(tmp, mode="w", zarr_format=3, consolidated=False)
     group = zarr.open_group(tmp, mode="r+")
+    from zarr.codecs import Crc32cCodec, ZstdCodec
+
     for name, (dtype, fill, var_attrs) in _variables().items():
         a = group.create_array(name, shape=sweep.shape, chunks=sweep.chunk_shape, dtype=dtype, fill_value=fill,
-                               dimension_names=sweep.dims)
+                               dimension_names=sweep.dims, compressors=(ZstdCodec(), Crc32cCodec()))
         a.attrs.update(var_attrs)
     done = group.create_array("chunk_done", shape=(sweep.n_chunks,), chunks=(1,), dtype=np.int8, fill_value=0,
                               dimension_names=("chunk",))
@@ -108,23 +115,64 @@ def _made_by(path: Path) -> dict:
     return made
 
 
-def finished(path, sweep) -> set[int]:
-    """The chunks whose outputs are all in the store (an unreadable flag counts as not finished)."""
+class Survey(NamedTuple):
+    """What a store holds: the chunks finished and intact, and the chunks flagged finished whose
+    files are not (chunk → what is wrong with it)."""
+
+    done: set[int]
+    damaged: dict[int, str]
+
+
+def survey(path, sweep) -> Survey:
+    """Each chunk flagged finished is checked: every output's chunk file is there and reads back
+    (its CRC-32C matches). An unreadable flag counts as not finished."""
     import zarr
 
-    done = zarr.open_array(Path(path) / "chunk_done", mode="r")
+    path = Path(path)
+    group = zarr.open_group(path, mode="r")
+    done_flags = group["chunk_done"]
     try:  # one read; a damaged flag file fails it, and then each flag is read alone
-        return {int(k) for k in np.flatnonzero(done[...] == 1)}
+        flagged = {int(k) for k in np.flatnonzero(done_flags[...] == 1)}
     except Exception:
-        pass
-    out = set()
-    for k in range(sweep.n_chunks):
-        try:
-            if done[k] == 1:
-                out.add(k)
-        except Exception:
-            pass
-    return out
+        flagged = set()
+        for k in range(sweep.n_chunks):
+            try:
+                if done_flags[k] == 1:
+                    flagged.add(k)
+            except Exception:
+                pass
+    arrays = {name: group[name] for name in _variables()}
+    done, damaged = set(), {}
+    for k in sorted(flagged):
+        region = sweep.chunk_region(k)
+        at = tuple(s.start // c for s, c in zip(region, sweep.chunk_shape))
+        for name, a in arrays.items():
+            key = a.metadata.encode_chunk_key(at)
+            if not (path / name / key).is_file():
+                damaged[k] = f"{name}: chunk file {name}/{key} is missing"
+                break
+            try:
+                a[region]
+            except Exception as e:
+                damaged[k] = f"{name}: chunk file {name}/{key} is unreadable ({type(e).__name__}: {e})"
+                break
+        else:
+            done.add(k)
+    return Survey(done, damaged)
+
+
+def finished(path, sweep) -> set[int]:
+    """The chunks whose outputs are all in the store, intact (`survey`)."""
+    return survey(path, sweep).done
+
+
+def unflag(path, chunks) -> None:
+    """Mark `chunks` as not finished."""
+    import zarr
+
+    flags = zarr.open_array(Path(path) / "chunk_done", mode="r+")
+    for k in chunks:
+        flags[k] = 0
 
 
 def write_chunk(path, sweep, k: int, outputs: dict[str, np.ndarray]) -> None:
@@ -133,8 +181,9 @@ def write_chunk(path, sweep, k: int, outputs: dict[str, np.ndarray]) -> None:
 
     group = zarr.open_group(path, mode="r+")
     region = sweep.chunk_region(k)
+    every = {"write_empty_chunks": True}  # a file even for a chunk equal to the fill: a missing file is damage
     for name in _variables():
-        group[name][region] = outputs[name]
+        group[name].with_config(every)[region] = outputs[name]
     group["chunk_done"][k] = 1
 
 
@@ -181,4 +230,4 @@ def in_memory(sweep, chunks: dict[int, dict]):
     return xr.Dataset(data, coords=_coordinates(sweep), attrs=sweep.attrs())
 
 
-__all__ = ["NOT_RUN", "finished", "in_memory", "kept_scenes", "load", "open_for", "write_chunk"]
+__all__ = ["NOT_RUN", "Survey", "finished", "survey", "unflag", "in_memory", "kept_scenes", "load", "open_for", "write_chunk"]
