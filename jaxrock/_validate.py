@@ -11,6 +11,7 @@ nothing can be a tracer before JAX is imported, and `within_limits` imports it w
 from __future__ import annotations
 
 import math
+import os
 import sys
 from typing import NamedTuple
 
@@ -140,8 +141,13 @@ def check_writable(name: str, path) -> None:
     from pathlib import Path
 
     path = Path(path)
+    if path.is_symlink():
+        raise JaxrockInputError(f"{name} {path}: is a symbolic link (to {os.path.realpath(path)}); jaxrock does not write "
+                                f"through links into files it did not make: name the file itself, or another path")
     if path.is_dir():
         raise JaxrockInputError(f"{name} {path}: is a folder; expected a file path")
+    if path.exists() and not path.is_file():
+        raise JaxrockInputError(f"{name} {path}: is not a regular file (a device, a FIFO or a socket); expected a file path")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".jaxrock-write-test-"):

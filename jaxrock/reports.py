@@ -27,7 +27,7 @@ class CalibrationReport:
 
     result: CalibrationResult
     fit: PowerLawFit
-    fit_paper_range: PowerLawFit  # tanα ∈ {0.1, 0.2, 0.3}-ish range only (0.1 ≤ tanα ≤ 0.3)
+    fit_paper_range: PowerLawFit | None  # over the points with 0.1 ≤ tanα ≤ 0.3 (the paper's); None: fewer than 3 there
     table: list[dict]
     fig7_theta0_over_alpha: np.ndarray
     fig7_r2: np.ndarray  # (n_tanα, n_c̄, n_θ)
@@ -39,11 +39,12 @@ class CalibrationReport:
         rows = [head]
         for r in self.table:
             rows.append(
-                f"{r['tan_alpha']:6.3f} {r['alpha']:8.4f} {r['target_r2']:10.4f} {r['cbar_calibrated']:9.4f} "
+                f"{r['tan_alpha']:6.4g} {r['alpha']:8.4f} {r['target_r2']:10.4f} {r['cbar_calibrated']:9.4f} "
                 f"{r['cbar_eq17']:9.4f} {r['cbar_calibrated'] / r['cbar_eq17']:6.3f} {r['residual_rms']:9.2e} {r['iterations']:5d}"
             )
         rows.append(f"fit over tanα ∈ [{self.table[0]['tan_alpha']:g}, {self.table[-1]['tan_alpha']:g}]: {self.fit}  (paper: k = 0.02, n = 2)")
-        rows.append(f"fit over tanα ∈ [0.1, 0.3]: {self.fit_paper_range}")
+        rows.append(f"fit over tanα ∈ [0.1, 0.3]: "
+                    + (f"{self.fit_paper_range}" if self.fit_paper_range is not None else "none (fewer than 3 of the tanα are in it)"))
         return "\n".join(rows)
 
 
@@ -84,7 +85,7 @@ def calibration_report(
 
     fit = fit_power_law(res.alpha, res.cbar)
     sel = (np.asarray(res.tan_alpha) >= 0.1 - 1e-9) & (np.asarray(res.tan_alpha) <= 0.3 + 1e-9)
-    fit_pr = fit_power_law(np.asarray(res.alpha)[sel], np.asarray(res.cbar)[sel]) if sel.sum() >= 3 else fit
+    fit_pr = fit_power_law(np.asarray(res.alpha)[sel], np.asarray(res.cbar)[sel]) if sel.sum() >= 3 else None
 
     table = []
     for i in range(len(ta)):

@@ -67,13 +67,16 @@ def _description(scenes: Scenes) -> dict[str, str]:
     return d
 
 
-def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: int = 256, progress: bool = True) -> BatchReport:
+def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: int = 256, progress: bool = True,
+               force: bool = False) -> BatchReport:
     """Run every scene of `scenes_path` and write `results_path` (see the module docstring).
 
     All rows are checked first (a `JaxrockInputError` names a bad row and its column).
     Results are appended per chunk; with `resume`, rows already in `results_path` are skipped,
     once `<results>.made_by.json` shows they were made by this package version from the same
-    record contents (else a `JaxrockInputError` names the difference).
+    record contents (else a `JaxrockInputError` names the difference). An existing file without
+    that description beside it is not a results file of a batch run: it is overwritten only with
+    `force`.
     """
     if int(chunk_size) < 1:
         raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
@@ -87,6 +90,9 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
     clash = [h for h in header if h.lower() in ("row", *RESULT_COLUMNS)]
     if clash:
         raise JaxrockInputError(f"{scenes_path}: line 1: column(s) {clash} are names of result columns; rename them")
+    if results.exists() and not force and not results.with_name(results.name + ".made_by.json").is_file():
+        raise JaxrockInputError(f"results file {results} exists and is not the results of a batch run (no {results.name}.made_by.json "
+                                f"beside it); pass --force to overwrite it, or name another path")
     with exclusive(results, "results file"):
         return _run(scenes, header, results, resume, chunk_size, progress, t0)
 

@@ -16,7 +16,7 @@ from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untru
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MODEL_PARAMETERS, PULSES, RECORD_ALIASES,
-                     UNDAMPED, builtin_record_names, model_kinds, parameter_help)
+                     TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, parameter_help)
 from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model,
                       parse_values, solution_summary, spectrum_summary)
 
@@ -204,6 +204,7 @@ def batch(
     results: str = typer.Argument(..., help="results CSV to write (a folder, or a path ending in /: <folder>/<scenes stem>_results.csv)"),
     resume: bool = typer.Option(False, "--resume", help="skip rows already in the results file"),
     chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
+    force: bool = typer.Option(False, "--force", help="overwrite an existing file that is not the results of a batch run"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
     from .._validate import check_writable
@@ -215,7 +216,7 @@ def batch(
     from ..interrupt import Interrupted
 
     try:
-        rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet)
+        rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet, force=force)
     except Interrupted:
         typer.echo(f"interrupted: {count_results(results):,} rows kept in {results}; resume with: {_resume_command('--resume')}",
                    err=True)
@@ -526,10 +527,11 @@ def calibrate(
 
     _check_count("--max-iter", max_iter)
     check_writable("--out", out / "calibration.csv")
+    _hold(out, "--out")
     ta = None
     if tan_alphas is not None:
         ta = parse_values("--tan-alphas", tan_alphas)
-        check_range("--tan-alphas", ta, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_range("--tan-alphas", ta, TAN_ALPHA_MIN, 1.0, hi_open=True)
         if np.unique(ta).size < 3:
             raise JaxrockInputError(f"--tan-alphas = {tan_alphas!r}: {np.unique(ta).size} distinct value(s); "
                                     "the power-law fit c̄ = k (α/0.1)^n needs at least 3")

@@ -36,6 +36,7 @@ def write_atomically(path: str | os.PathLike, write: Callable[[Path], None]) -> 
     path = Path(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f"tmp_{os.getpid()}_", suffix=f"_{path.name}")
     os.close(fd)
+    os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it 0600: the file gets the mode open() would give it
     try:
         write(Path(tmp))
         os.replace(tmp, path)
@@ -43,6 +44,12 @@ def write_atomically(path: str | os.PathLike, write: Callable[[Path], None]) -> 
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _alive(pid: int) -> bool:
@@ -60,7 +67,7 @@ def exclusive(path: str | os.PathLike, what: str):
     """Hold `<path>.lock` while a run writes `path` (an output stem, a checkpoint, a results
     file): a second run on it is refused in one line. A lock left by a process that no longer
     exists on this host is taken over."""
-    lock = Path(f"{os.fspath(path)}.lock")
+    lock = Path(f"{os.path.realpath(path)}.lock")  # by the resolved path: two names of one output share one lock
     lock.parent.mkdir(parents=True, exist_ok=True)
     me = f"{socket.gethostname()} {os.getpid()}"
     for _ in range(2):

@@ -1,0 +1,95 @@
+"""Hostile input, third pass (issue 52): the files a command writes. No write through a symbolic
+link into a file the command did not make, no unrelated file overwritten without `--force`, one
+lock per file whatever its name, outputs with the user's umask, devices refused as outputs."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import pytest
+from helpers import invoke, write
+
+from jaxrock import JaxrockInputError
+from jaxrock.io.files import exclusive, write_atomically
+
+SCENES = "height,tan_alpha,accel_ratio,omega_ratio\n10,0.2,3,6\n"
+
+
+def test_batch_does_not_write_through_a_symlink(tmp_path):
+    """`ln -s target.csv link.csv; jaxrock batch b.csv link.csv` overwrote target.csv and replaced
+    the link by a 0600 file."""
+    scenes = write(tmp_path / "b.csv", SCENES)
+    target = write(tmp_path / "target.csv", "precious\n")
+    (tmp_path / "link.csv").symlink_to(target)
+    r = invoke("batch", scenes, tmp_path / "link.csv", "--quiet")
+    assert r.exit_code == 2 and "is a symbolic link" in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert target.read_text() == "precious\n" and (tmp_path / "link.csv").is_symlink()
+
+
+def test_batch_does_not_overwrite_an_unrelated_file_without_force(tmp_path):
+    """`jaxrock batch b.csv precious.csv` overwrote an existing file silently; its own results file
+    (with its description beside it) is still rewritten by a rerun, and --force overwrites."""
+    scenes = write(tmp_path / "b.csv", SCENES)
+    precious = write(tmp_path / "precious.csv", "keep me\n")
+    r = invoke("batch", scenes, precious, "--quiet")
+    assert r.exit_code == 2 and "exists and is not the results of a batch run" in r.output and "--force" in r.output, r.output
+    assert precious.read_text() == "keep me\n"
+    r = invoke("batch", scenes, precious, "--quiet", "--force")
+    assert r.exit_code == 0, r.output
+    assert precious.read_text().startswith("row,height")
+    r = invoke("batch", scenes, precious, "--quiet")  # now a results file of batch: a rerun rewrites it
+    assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize("device", ["/dev/null", "/dev/full"])
+def test_batch_refuses_a_device_as_its_results(tmp_path, device):
+    """`batch b.csv /dev/full` was a traceback (ENOSPC), `/dev/null` created /dev/null.made_by.json."""
+    scenes = write(tmp_path / "b.csv", SCENES)
+    existed = os.path.exists(device + ".made_by.json")
+    r = invoke("batch", scenes, device, "--quiet")
+    assert r.exit_code == 2 and "is not a regular file" in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert os.path.exists(device + ".made_by.json") == existed
+
+
+def test_one_lock_per_file_whatever_its_name(tmp_path):
+    """Two runs into one file through a symlinked name both took "the" lock."""
+    real = tmp_path / "store.zarr"
+    real.mkdir()
+    (tmp_path / "alias.zarr").symlink_to(real)
+    with exclusive(real, "store"):
+        with pytest.raises(JaxrockInputError, match="another run"):
+            with exclusive(tmp_path / "alias.zarr", "store"):
+                pass
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027, 0o077])
+def test_outputs_keep_the_users_umask(tmp_path, umask):
+    """Every CSV, netCDF and Markdown output was written 0600 (mkstemp's mode) whatever the umask."""
+    old = os.umask(umask)
+    try:
+        path = write_atomically(tmp_path / "out.csv", lambda tmp: tmp.write_text("x\n"))
+        opened = tmp_path / "opened.csv"
+        opened.write_text("x\n")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(path.stat().st_mode) == stat.S_IMODE(opened.stat().st_mode) == 0o666 & ~umask
+
+
+def test_calibrate_refuses_a_slenderness_refused_everywhere_else(tmp_path):
+    """`calibrate --tan-alphas 0.0005,0.1,0.2` was accepted (and printed as 0.001)."""
+    r = invoke("calibrate", "--tan-alphas", "0.0005,0.1,0.2", "--out", tmp_path)
+    assert r.exit_code == 2 and "--tan-alphas" in r.output and "0.001" in r.output, r.output
+    assert len(r.output.strip().splitlines()) == 1
+
+
+def test_calibration_table_says_when_the_papers_range_has_no_fit():
+    """With no three tanα in [0.1, 0.3] the report printed the full fit as "fit over tanα ∈ [0.1, 0.3]"."""
+    from jaxrock.analyses.calibration import fit_power_law
+    from jaxrock.reports import CalibrationReport
+
+    row = dict(tan_alpha=0.5, alpha=0.46, target_r2=0.5, cbar_calibrated=0.4, cbar_eq17=0.4, residual_rms=0.0, iterations=3)
+    table = [row, {**row, "tan_alpha": 0.9, "alpha": 0.73}, {**row, "tan_alpha": 0.99, "alpha": 0.78}]
+    fit = fit_power_law([0.46, 0.73, 0.78], [0.4, 0.9, 1.0])
+    text = CalibrationReport(None, fit, None, table, None, None).format_table()
+    assert "fit over tanα ∈ [0.5, 0.99]:" in text and "fit over tanα ∈ [0.1, 0.3]: none (fewer than 3" in text
