@@ -93,3 +93,57 @@ def test_calibration_table_says_when_the_papers_range_has_no_fit():
     fit = fit_power_law([0.46, 0.73, 0.78], [0.4, 0.9, 1.0])
     text = CalibrationReport(None, fit, None, table, None, None).format_table()
     assert "fit over tanα ∈ [0.5, 0.99]:" in text and "fit over tanα ∈ [0.1, 0.3]: none (fewer than 3" in text
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--scale", "3,1,2"], "--scale grid must be strictly increasing"),
+        (["--model", "rigid,rigid"], "a model named twice"),
+        (["--refine", "100"], "--refine = 100; valid: an integer in [0, 40]"),
+    ],
+)
+def test_suite_refuses_what_would_give_a_wrong_least_scale(tmp_path, args, needle):
+    """`suite elcentro --scale 3,1,2 --refine 2` gave least scale 2.25 where factor 2 overturns (the
+    factors were taken in the order given); `--model rigid,rigid` was a traceback; `--refine 100`
+    bisected to 2e-16 in 105 s."""
+    base = {"--model": "rigid", "--height": "2", "--scale": "1,2,3", "--refine": "2"}
+    base.update(dict(zip(args[::2], args[1::2])))
+    r = invoke("suite", "elcentro", *[x for kv in base.items() for x in kv], "--out", tmp_path / "s", "-q", "--yes")
+    assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert not (tmp_path / "s" / "rigid.zarr").exists()
+
+
+@pytest.mark.parametrize(
+    "given, needle",
+    [("/dev/full", "is not a regular file"), ("nowhere/", "names a folder"), (".", "names a folder"),
+     ("theta.xyz", "matplotlib cannot write '.xyz' files")],
+)
+def test_simulate_plot_path_is_refused_before_the_run(tmp_path, monkeypatch, given, needle):
+    """`--plot /dev/full` wrote /dev/full.png and exited 0; `--plot dir_that_does_not_exist/` wrote
+    ./dir_that_does_not_exist.png."""
+    monkeypatch.chdir(tmp_path)
+    r = invoke("simulate", "--plot", given)
+    assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert not os.path.exists(given.rstrip("/") + ".png") and not list(tmp_path.iterdir())
+
+
+def test_simulate_plot_without_suffix_says_the_file_it_wrote(tmp_path):
+    """`--plot noext` wrote noext.png but printed "wrote noext"."""
+    r = invoke("simulate", "--plot", tmp_path / "noext", "--n-points", 50)
+    assert r.exit_code == 0, r.output
+    assert f"wrote {tmp_path / 'noext.png'}" in r.output and (tmp_path / "noext.png").is_file()
+    r = invoke("simulate", "--plot", tmp_path / "p.png", "--n-points", 100_000_000)
+    assert r.exit_code == 2 and "--n-points = 100000000; valid: an integer in [2, 1,000,000]" in r.output, r.output
+
+
+def test_simulate_run_time_waits_for_the_result(monkeypatch):
+    """A 154 s record run printed "run time 4.26 s": the timer stopped before JAX's asynchronous
+    result was ready. The printed time now covers `block_until_ready`."""
+    import jax
+
+    calls = []
+    real = jax.block_until_ready
+    monkeypatch.setattr(jax, "block_until_ready", lambda x: calls.append(1) or real(x))
+    r = invoke("simulate", "--accel-ratio", 3)
+    assert r.exit_code == 0 and "run time" in r.output and calls, r.output

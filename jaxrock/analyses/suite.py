@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import JaxrockInputError
+from .._validate import JaxrockInputError, check_grid
 from .sweep import Sweep, run_sweep, run_values
 
 
@@ -47,8 +47,9 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
 
     if not sweep.records or "scale" not in sweep.axes:
         raise JaxrockInputError("least_overturning_scale needs a record sweep with a scale axis: Sweep.make(..., records=[...], scale=[...])")
-    if int(refine) < 0:
-        raise JaxrockInputError(f"refine = {refine}; valid: an integer >= 0")
+    if not 0 <= int(refine) <= 40:
+        raise JaxrockInputError(f"refine = {refine}; valid: an integer in [0, 40] (each bisection halves the bracket)")
+    check_grid("scale (record factors)", sweep.axes["scale"])  # the least factor is the first of them that overturns
     assert sweep.dims[0] == "record" and sweep.dims[-1] == "scale"  # AXIS_ORDER: records outermost, scale innermost
     ds = run_sweep(sweep, store, progress=progress, devices=devices, history=history).drop_vars("chunk_done")
     sc = sweep.axes["scale"]
@@ -211,6 +212,9 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
 
     if isinstance(models, str):
         models = (models,)
+    if len(set(models)) < len(models):
+        raise JaxrockInputError(f"models {list(models)}: a model kind given twice; name each once")
+    check_grid("scale (record factors)", scale)  # the least overturning factor is the first of them that overturns
     _check_im(im)
     sweeps = [Sweep.make(m, records=records, scale=scale, integrator=integrator, **quantities) for m in models]  # every input checked first
     measures = suite_measures(sweeps[0].records)

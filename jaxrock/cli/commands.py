@@ -17,8 +17,8 @@ from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untru
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MODEL_PARAMETERS, PULSES, RECORD_ALIASES,
                      TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, parameter_help)
-from .options import (BackboneKind, ModelKind, PulseKind, _axis, _check_count, _excitation, _integrator, build_model,
-                      parse_values, solution_summary, spectrum_summary)
+from .options import (MAX_PLOT_POINTS, MAX_REFINE, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
+                      _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary)
 
 UNDAMPED_HELP = "no energy loss: " + ", ".join(f"{k} = {v:g}" for k, v in UNDAMPED.items()) + " (whichever the model takes)"
 
@@ -53,7 +53,7 @@ def spectrum(
     checkpoint: bool = typer.Option(True, "--checkpoint/--no-checkpoint", help="keep finished batches in the folder <out>.checkpoint; a rerun resumes"),
     batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into batches "
                                    "of sizes the compiled passes share"),
-    refine: int = typer.Option(10, min=0, max=40, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
+    refine: int = typer.Option(10, min=0, max=MAX_REFINE, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
     tol: Optional[float] = typer.Option(
         None, help="spring models: run generalized-α at this local tolerance in (0, 0.1), its global error checked by a run at 10x "
         "the tolerance (status inaccurate beyond 1e-2 in θ/α; see README); default: the model's default integrator"),
@@ -136,9 +136,10 @@ def simulate(
                                                     "--smoothing 1e-5 is within 1e-3 of the sharp limit, README)"),
     smoothing: Optional[float] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1) (default {DEFAULT_SMOOTHING:g})"),
     tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
-    plot: Optional[Path] = typer.Option(None, help="write a time-history plot (PNG) here"),
+    plot: Optional[str] = typer.Option(None, help="write a time-history plot here (PNG; another suffix matplotlib knows, e.g. .pdf, "
+                                       "picks that format)"),
     t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
-    n_points: Optional[int] = typer.Option(None, help="plot: number of saved time points (default 1500)"),
+    n_points: Optional[int] = typer.Option(None, help=f"plot: number of saved time points, 2 to {MAX_PLOT_POINTS:,} (default 1500)"),
 ):
     """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta,
@@ -152,15 +153,18 @@ def simulate(
             if v is not None:
                 raise JaxrockInputError(f"{flag} applies to the time-history plot: give --plot FILE.png as well")
     else:
-        from .._validate import check_positive, check_writable
+        from .._validate import JaxrockInputError, check_positive
 
-        check_writable("--plot", plot)
+        plot = figure_path("--plot", plot)
         n_points = 1500 if n_points is None else n_points
-        _check_count("--n-points", n_points)
+        if not 2 <= n_points <= MAX_PLOT_POINTS:
+            raise JaxrockInputError(f"--n-points = {n_points}; valid: an integer in [2, {MAX_PLOT_POINTS:,}] (a figure shows a few thousand)")
         if t_free is not None:
             check_positive("--t-free", t_free)
+    import jax
+
     t0 = time.perf_counter()
-    sol = _simulate(m, exc, integrator=integ)
+    sol = jax.block_until_ready(_simulate(m, exc, integrator=integ))  # JAX returns before it has computed
     seconds = time.perf_counter() - t0
     typer.echo(f"{model.value} model, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}")
     typer.echo(solution_summary(sol, m))
@@ -262,8 +266,7 @@ def record_spectrum(
 
     hs = parse_values("--heights", heights)
     sc = parse_values("--scales", scales)
-    if refine < 0:
-        raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
+    _check_refine(refine)
     m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
     exc, desc = _excitation(m.block, DEFAULT_PULSE, record, 1.0, None, None, None, None, units)
     out = output_stem(out, "record_spectrum")
@@ -441,15 +444,15 @@ def suite(
     """A record suite: each record's intensity measures, its least overturning scale factor for each
     column (figure 10 for a suite: median and 16-84 % band) and the fragility of each column
     (lognormal by maximum likelihood, bootstrap band), for each model."""
-    from .._validate import JaxrockInputError, check_writable
+    from .._validate import JaxrockInputError, check_grid, check_writable
     from ..analyses.suite import _check_im
 
     kinds = [k.strip() for k in model.split(",") if k.strip()]
     bad = [k for k in kinds if k not in model_kinds()]
-    if not kinds or bad:
-        raise JaxrockInputError(f"--model {model!r}: {', '.join(bad) or 'no model'}; valid: comma-separated {', '.join(model_kinds())}")
-    if refine < 0:
-        raise JaxrockInputError(f"--refine = {refine}; valid: an integer >= 0")
+    if not kinds or bad or len(set(kinds)) < len(kinds):
+        what = ", ".join(bad) or ("no model" if not kinds else "a model named twice")
+        raise JaxrockInputError(f"--model {model!r}: {what}; valid: comma-separated, each once, of {', '.join(model_kinds())}")
+    _check_refine(refine)
     _check_count("--boot", boot)
     _check_im(im)
     given = {}
@@ -459,6 +462,7 @@ def suite(
     sc = parse_values("--scale", scale)
     if sc.size < 2:
         raise JaxrockInputError(f"--scale {scale!r}: one factor; give at least 2 (the sweep whose outcomes are fitted)")
+    check_grid("--scale", sc)  # the least overturning factor is the first of them that overturns
     check_writable("--out", out / "fragility.csv")
     _hold(out, "--out")
     from ..io.records import read_records

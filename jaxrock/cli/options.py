@@ -31,6 +31,41 @@ def _check_count(name: str, n: int):
         raise JaxrockInputError(f"{name} = {n}; valid: an integer >= 1")
 
 
+def figure_path(flag: str, text: str) -> Path:
+    """A figure file the user names: not a folder (an existing one, or a name ending in a
+    separator), not a device or FIFO; without a suffix it gets ".png" (what matplotlib writes, now
+    also what is said); a suffix matplotlib cannot write is refused."""
+    import os
+
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    from .._validate import JaxrockInputError, check_writable
+
+    if not text or text.endswith((os.sep, "/")) or Path(text).is_dir():
+        raise JaxrockInputError(f"{flag} {text!r}: names a folder; expected a figure file, e.g. {flag} theta.png")
+    path = Path(text)
+    if path.exists() and not path.is_file():
+        raise JaxrockInputError(f"{flag} {path}: is not a regular file (a device, a FIFO or a socket); expected a figure file")
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if not path.suffix:
+        path = path.with_name(path.name + ".png")
+    elif path.suffix[1:].lower() not in formats:
+        raise JaxrockInputError(f"{flag} {path}: matplotlib cannot write {path.suffix!r} files; valid: {', '.join(sorted(formats))}")
+    check_writable(flag, path)
+    return path
+
+
+MAX_PLOT_POINTS = 1_000_000  # simulate --plot: saved time points
+MAX_REFINE = 40  # bisections: the step / 2^40 is below what a verdict can resolve (spectrum's --refine has the same bound)
+
+
+def _check_refine(refine: int):
+    from .._validate import JaxrockInputError
+
+    if not 0 <= refine <= MAX_REFINE:
+        raise JaxrockInputError(f"--refine = {refine}; valid: an integer in [0, {MAX_REFINE}] (each bisection halves the bracket)")
+
+
 def _axis(name: str, lo: float, hi: float, n: int) -> np.ndarray:
     from .._validate import JaxrockInputError, check_positive
 
