@@ -97,3 +97,13 @@ def test_float32_mode_is_gone_and_its_variable_refused(value):
     env = {**os.environ, "JAXROCK_X64": value}
     r = subprocess.run([sys.executable, "-c", "import jaxrock"], env=env, capture_output=True, text=True)
     assert r.returncode != 0 and f"JAXROCK_X64 = '{value}': jaxrock runs in float64 only" in r.stderr
+
+
+def test_run_batch_with_mismatched_batch_sizes_is_refused():
+    """A model batch of 3 with 4 excitations was a raw vmap error ("vmap got inconsistent sizes")."""
+    models = jax.vmap(lambda h: jr.RigidModel(jr.Block.from_slenderness(h, 0.2)))(jnp.asarray([5.0, 10.0, 20.0]))
+    pulses = jax.vmap(jr.RickerPulse)(jnp.full(4, 5.0), jnp.full(4, 6.0))
+    with pytest.raises(JaxrockInputError, match=re.escape("run_batch: the batch sizes differ (excitations: [4]; model: [3])")):
+        jr.run_batch(models, pulses, model_batched=True)
+    with pytest.raises(JaxrockInputError, match="one is a scalar"):
+        jr.run_batch(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), jr.RickerPulse(5.0, 6.0))
