@@ -1,10 +1,13 @@
 """Record readers (PEER .AT2, two-column text, packaged El Centro) and the sampled `Record`."""
 
+import os
 from pathlib import Path
 
 import jax
 import numpy as np
 import pytest
+
+from helpers import invoke
 
 from jaxrock import G, JaxrockInputError
 from jaxrock.io.records import builtin_record, el_centro, read_at2, read_record, read_records, read_two_column
@@ -121,6 +124,32 @@ def test_at2_header_variants(tmp_path):
     assert read_at2(path, name="mine").name == "mine"
 
 
+NGA_ROTATED = ("Orig PEER filename = RSN1063_NORTHR_RRS228.AT2, Scale factor = 1.000\n"
+               "Northridge-01, 1/17/1994, Rinaldi Receiving Sta, 228\n"
+               "Rotated to FN azimuth = 32.0\n"
+               "Rotated to FP azimuth = 122.0\n"
+               "Fault-normal component\n"
+               "Acceleration in {units}\n"
+               "{line}\n")
+
+
+@pytest.mark.parametrize("line", ["6 0.0050 NPTS, DT", "0.0050 6 DT, NPTS", "NPTS= 6, DT= .0050 SEC", "DT= 0.005, NPTS= 6",
+                                  "NPTS=  6, dt=  0.005"])
+def test_at2_npts_dt_on_any_header_line_in_any_spelling(tmp_path, line):
+    """Issue 52: the rotated fault-normal/fault-parallel components of PEER's NGA data have a
+    6-line header and "7997 0.0050 NPTS, DT" on line 7: they were refused ("line 4: no numeric
+    NPTS="). NPTS and DT are now read from the first header line that gives them, either order,
+    values before or after their labels; "Acceleration in g" states the units."""
+    body = ".1E-01 -.2E-01 0.03\n-0.04 0.05 0.06\n"
+    rec = read_record(_write(tmp_path, "fn.AT2", NGA_ROTATED.format(units="g", line=line) + body))
+    np.testing.assert_allclose(rec.acc, G * np.array([0.01, -0.02, 0.03, -0.04, 0.05, 0.06]), rtol=1e-15)
+    assert float(rec.dt) == 0.005 and rec.name == "fn"
+    rec = read_record(_write(tmp_path, "cm.AT2", NGA_ROTATED.format(units="cm/s/s", line=line) + body))
+    np.testing.assert_allclose(rec.acc, 0.01 * np.array([0.01, -0.02, 0.03, -0.04, 0.05, 0.06]), rtol=1e-15)
+    with pytest.raises(JaxrockInputError, match="states units 'cm/s/s', but units = 'g' was given"):
+        read_record(tmp_path / "cm.AT2", units="g")
+
+
 def test_two_column_variants(tmp_path):
     text = "# header\n\n5.00, 0.1\n5.02,-0.2  # trailing comment\n5.04 , 0.3\n"
     rec = read_record(_write(tmp_path, "r.csv", text))
@@ -135,7 +164,9 @@ def test_two_column_variants(tmp_path):
 # --- malformed input ----------------------------------------------------------------------------
 
 BAD_AT2 = {
-    "no_npts": (AT2_HEAD + "DT= .01 SEC\n0.1 0.2\n", r"line 4: no numeric NPTS="),
+    "no_npts": (AT2_HEAD + "DT= .01 SEC\n0.1 0.2\n", r"no NPTS and DT in the first 6 line\(s\)"),
+    "two_npts": (AT2_HEAD + "NPTS= 2, NPTS= 3, DT= .01\n0.1 0.2\n", r"line 4: NPTS = 2 and 3"),
+    "npts_after_data": (AT2_HEAD + "0.1 0.2\n" * 9 + "NPTS= 2, DT= .01\n", r"no NPTS and DT in the first 12 line\(s\)"),
     "no_dt": (AT2_HEAD + "NPTS= 2, SEC\n0.1 0.2\n", r"line 4: no numeric DT="),
     "dt_zero": (AT2_HEAD + "NPTS= 2, DT= 0.0\n0.1 0.2\n", r"line 4: DT = 0 s; the time step must be > 0"),
     "dt_negative": (AT2_HEAD + "NPTS= 2, DT= -.01\n0.1 0.2\n", r"DT = -0.01 s; the time step must be > 0"),
@@ -145,7 +176,7 @@ BAD_AT2 = {
     "token": (AT2_HEAD + "NPTS= 3, DT= .01\n0.1 0.2\n0.3x\n", r"line 6: non-numeric token '0.3x'"),
     "fewer": (AT2_HEAD + "NPTS= 4, DT= .01\n0.1 0.2\n0.3\n", r"3 values after the header, fewer than NPTS = 4"),
     "more": (AT2_HEAD + "NPTS= 2, DT= .01\n0.1 0.2\n0.3\n", r"3 values after the header, more than NPTS = 2"),
-    "short_header": ("PEER\nEVENT\n", r"only 3 line\(s\); an .AT2 file needs 4 header lines"),
+    "short_header": ("PEER\nEVENT\n", r"no NPTS and DT in the first 3 line\(s\)"),
     "empty": ("", r"the file is empty"),
     "blank": ("\n  \n", r"the file is empty"),
 }
@@ -223,3 +254,26 @@ def test_at2_units_refused_when_uninterpretable_or_contradicted(tmp_path):
     path = _write(tmp_path, "n.AT2", "PEER\nEVENT\nno statement here\nNPTS= 2, DT= .01\n0.1 0.2\n")
     assert float(read_record(path).acc[0]) == pytest.approx(0.1 * G, rel=1e-15)
     assert float(read_record(path, units="m/s2").acc[0]) == pytest.approx(0.1, rel=1e-15)
+
+
+def test_lists_that_name_themselves_or_each_other_are_refused(tmp_path):
+    """Issue 52: a .list naming itself, or two naming each other, was a RecursionError."""
+    (tmp_path / "a.list").write_text("a.list\n")
+    with pytest.raises(JaxrockInputError, match=r"the list .*a.list names itself"):
+        read_records([tmp_path / "a.list"])
+    (tmp_path / "b.list").write_text("elcentro\nc.list\n")
+    (tmp_path / "c.list").write_text("b.list\n")
+    with pytest.raises(JaxrockInputError, match=r"names itself \(.*b.list → .*c.list → .*b.list\)"):
+        read_records([tmp_path / "b.list"])
+
+
+def test_a_folder_or_a_fifo_is_not_read_as_a_record(tmp_path):
+    """`read_record` on a folder was an IsADirectoryError; a FIFO was reported as "file not found"
+    on the command line (and would have blocked a reader)."""
+    with pytest.raises(JaxrockInputError, match="is a folder; read_record reads one record file"):
+        read_record(tmp_path)
+    os.mkfifo(tmp_path / "pipe.AT2")
+    with pytest.raises(JaxrockInputError, match="is not a regular file"):
+        read_record(tmp_path / "pipe.AT2")
+    r = invoke("simulate", "--record", tmp_path / "pipe.AT2")
+    assert r.exit_code == 2 and "is not a regular file" in r.output, r.output

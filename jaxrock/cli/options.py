@@ -201,7 +201,7 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
             from ..io.records import read_record
             from ..scene import builtin_record_names
 
-            if not Path(record).is_file():
+            if not Path(record).exists():
                 raise JaxrockInputError(f"--record {record}: file not found, nor a packaged record ({builtin_record_names()})")
             rec = read_record(record) if units is None else read_record(record, units=units)
         return rec.scaled(scale), f"{rec.name} × {scale:g}"

@@ -2,8 +2,10 @@
 
 Two formats are read:
 
-* PEER NGA `.AT2`: four header lines (the second names the event, the third states the units,
-  the fourth gives `NPTS=` and `DT=` [s]), then the accelerations in rows of any length.
+* PEER NGA `.AT2`: header lines (in the classic layout four: the second names the event, the
+  third states the units, the fourth gives `NPTS=` and `DT=` [s]; the rotated components of the
+  NGA data carry six or more, with "7997 0.0050 NPTS, DT" last), then the accelerations in rows of
+  any length.
 * Two-column text: `time [s]  acceleration` per line, separated by whitespace or a comma, `#`
   starting a comment; accelerations in g unless `units` says otherwise.
 
@@ -28,10 +30,15 @@ _UNITS = {"g": G, "m/s2": 1.0, "cm/s2": 0.01, "mm/s2": 1e-3, "in/s2": 0.0254, "f
 _UNITS_VALID = "g, m/s2, cm/s2 (gal), mm/s2, in/s2, ft/s2 (also written m/s/s, m/sec^2, m/s²)"
 # a header's statement of units: 'IN UNITS OF G.', 'UNITS OF CM/S/S', 'The units are (g)'
 _HEADER_UNITS = re.compile(r"\bUNITS\b\s*(?:OF|ARE|:|=)?\s*\(?\s*([A-Za-z][A-Za-z/0-9*^²]*)", re.IGNORECASE)
-_HEADER_LINES = 4
+# 'Acceleration in g', 'ACCELERATION IN CM/S/S' (the NGA rotated components' header)
+_HEADER_IN = re.compile(r"\bACCELERATION\b.*?\bIN\s+\(?\s*([A-Za-z][A-Za-z/0-9*^²]*)", re.IGNORECASE)
+_HEADER_LINES = 4  # the classic layout: NPTS and DT on the fourth line
+_MAX_HEADER_LINES = 12  # NPTS and DT are looked for on the lines up to this one
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[Ee][-+]?\d+)?"
-_NPTS = re.compile(r"\bNPTS\s*=\s*([-+]?\d+)", re.IGNORECASE)
+_NPTS = re.compile(r"\bNPTS\s*=\s*([-+]?\d+)\b", re.IGNORECASE)
 _DT = re.compile(rf"\bDT\s*=\s*({_NUMBER})", re.IGNORECASE)
+# values first, then their labels in either order: '7997 0.0050 NPTS, DT', '0.005 7997 DT, NPTS'
+_LABELLED_AFTER = re.compile(rf"^\s*({_NUMBER})[\s,]+({_NUMBER})[\s,]+(NPTS|DT)\s*[,;]?\s*(NPTS|DT)\b", re.IGNORECASE)
 _UNIFORM_RTOL = 1e-6
 
 
@@ -57,7 +64,17 @@ def _split_lines(text: str) -> list[str]:
 
 
 def _read_lines(path: Path) -> list[str]:
-    raw = Path(path).read_bytes()
+    path = Path(path)
+    if path.is_dir():
+        raise JaxrockInputError(f"{path}: is a folder; read_record reads one record file (read_records reads a folder's records)")
+    if not path.exists():
+        raise JaxrockInputError(f"{path}: no such file")
+    if not path.is_file():
+        raise JaxrockInputError(f"{path}: is not a regular file (a FIFO, a device or a socket); expected a record file")
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise JaxrockInputError(f"{path}: cannot be read ({e.strerror or e})") from None
     if raw[:2] == b"\x1f\x8b":
         raise JaxrockInputError(f"{path}: the file is gzip-compressed; decompress it first (gunzip) to a text record")
     if b"\x00" in raw[:65536]:
@@ -107,35 +124,59 @@ def _numeric_rows(lines: list[str], first_lineno: int, source, comment: str | No
     raise AssertionError("unreachable: a bad token was not found line by line")  # pragma: no cover
 
 
-def _header_value(pattern: re.Pattern, key: str, line: str, source) -> str:
-    match = pattern.search(line)
-    if match is None:
-        raise JaxrockInputError(
-            f"{source}: line {_HEADER_LINES}: no numeric {key}= found in {line.strip()[:60]!r}; "
-            f"expected e.g. 'NPTS=  4000, DT= .01000 SEC'"
-        )
-    return match.group(1)
-
-
-def _at2_npts_dt(line: str, source) -> tuple[int, float]:
-    """NPTS and DT [s] from the fourth header line of an .AT2 file."""
-    npts = int(_header_value(_NPTS, "NPTS", line, source))
-    dt = float(_header_value(_DT, "DT", line, source))
+def _at2_npts_dt(line: str, lineno: int, source) -> tuple[int, float] | None:
+    """NPTS and DT [s] from one header line, or None where the line gives no NPTS. Spellings:
+    `NPTS=  4000, DT= .01000 SEC`, `NPTS= 4000 DT= 0.01`, `DT= 0.01 NPTS= 4000` (any case), and the
+    values before their labels, `7997 0.0050 NPTS, DT` (either order). A line with NPTS but no
+    DT, or two different NPTS, is refused."""
+    after = _LABELLED_AFTER.match(line)
+    if after is not None and {after.group(3).upper(), after.group(4).upper()} == {"NPTS", "DT"}:
+        first, second = after.group(1), after.group(2)
+        npts_text, dt_text = (first, second) if after.group(3).upper() == "NPTS" else (second, first)
+    else:
+        found = {m.group(1) for m in _NPTS.finditer(line)}
+        if not found:
+            return None
+        dts = {m.group(1) for m in _DT.finditer(line)}
+        if len(found) > 1 or len(dts) != 1:
+            what = f"NPTS = {' and '.join(sorted(found))}" if len(found) > 1 else ("no numeric DT=" if not dts else "two DT=")
+            raise JaxrockInputError(f"{source}: line {lineno}: {what} in {line.strip()[:60]!r}; "
+                                    f"expected one of each, e.g. 'NPTS=  4000, DT= .01000 SEC' or '4000 0.0100 NPTS, DT'")
+        npts_text, dt_text = found.pop(), dts.pop()
+    try:
+        npts = int(npts_text)
+    except ValueError:
+        raise JaxrockInputError(f"{source}: line {lineno}: NPTS = {npts_text}; the number of samples must be an integer") from None
+    dt = float(dt_text)
     if npts < 2:
-        raise JaxrockInputError(f"{source}: line {_HEADER_LINES}: NPTS = {npts}; a record needs NPTS >= 2 samples")
+        raise JaxrockInputError(f"{source}: line {lineno}: NPTS = {npts}; a record needs NPTS >= 2 samples")
     if dt <= 0:
-        raise JaxrockInputError(f"{source}: line {_HEADER_LINES}: DT = {dt:g} s; the time step must be > 0")
+        raise JaxrockInputError(f"{source}: line {lineno}: DT = {dt:g} s; the time step must be > 0")
     return npts, dt
 
 
-def _at2_units(lines: list[str], units: str | None, source) -> float:
-    """Factor to m/s² of an .AT2 file: the units its header states (first three lines: 'IN UNITS
-    OF G', 'UNITS OF CM/S/S', 'The units are (g)'), else `units`, else g (the PEER convention).
-    A stated unit it cannot interpret, or one that contradicts `units`, is refused."""
-    for lineno, line in enumerate(lines[: _HEADER_LINES - 1], start=1):
+def _at2_header(lines: list[str], source) -> tuple[int, int, float]:
+    """(header lines, NPTS, DT): the first line giving NPTS and DT ends the header."""
+    for k, line in enumerate(lines[:_MAX_HEADER_LINES]):
+        got = _at2_npts_dt(line, k + 1, source)
+        if got is not None:
+            return k + 1, *got
+    raise JaxrockInputError(
+        f"{source}: no NPTS and DT in the first {min(len(lines), _MAX_HEADER_LINES)} line(s); an .AT2 file's header ends with "
+        f"a line giving both, e.g. 'NPTS=  4000, DT= .01000 SEC' or '4000 0.0100 NPTS, DT', followed by the values"
+    )
+
+
+def _at2_units(header: list[str], units: str | None, source) -> float:
+    """Factor to m/s² of an .AT2 file: the units its header lines (before NPTS) state ('IN UNITS
+    OF G', 'UNITS OF CM/S/S', 'The units are (g)', 'Acceleration in g'), else `units`, else g (the
+    PEER convention). A stated unit it cannot interpret, or one that contradicts `units`, is refused."""
+    for lineno, line in enumerate(header, start=1):
         match = _HEADER_UNITS.search(line)
         if match is None:
-            continue
+            match = _HEADER_IN.search(line)
+            if match is None or _unit_key(match.group(1)) is None:  # 'in' before a word that is no unit says nothing
+                continue
         stated = match.group(1)
         key = _unit_key(stated)
         if key is None:
@@ -152,31 +193,28 @@ def _at2_units(lines: list[str], units: str | None, source) -> float:
 def read_at2(path: str | os.PathLike, *, units: str | None = None, name: str | None = None) -> Record:
     """Read a PEER NGA `.AT2` acceleration file into a `Record` in m/s².
 
-    The file has four header lines (the second names the event; the third states the units, as in
-    `ACCELERATION TIME HISTORY IN UNITS OF G` or `UNITS OF CM/S/S`; the fourth gives the number of
-    samples and the time step [s], as in `NPTS=  4000, DT= .01000 SEC` or `NPTS= 4000 DT= 0.01`),
-    then exactly NPTS accelerations, any number per row, in free or Fortran format
-    (`.6403182E-02`, `0.00630`). Units are read from the header; `units` is used where the header
-    states none (default g) and must agree where it does. `name` defaults to the event line (the
-    second header line), or the file's stem when that line is blank.
+    The header ends with the line that gives the number of samples and the time step [s] — the
+    fourth in the classic layout (the second names the event; the third states the units, as in
+    `ACCELERATION TIME HISTORY IN UNITS OF G` or `UNITS OF CM/S/S`), the seventh in the rotated
+    components of the NGA data ("Orig PEER filename = …", rotation lines, "Acceleration in g") —
+    found on any of the first 12 lines, spelt `NPTS=  4000, DT= .01000 SEC`, `NPTS= 4000 DT= 0.01`,
+    `DT= 0.01, NPTS= 4000` or `7997 0.0050 NPTS, DT`. Then exactly NPTS accelerations, any number
+    per row, in free or Fortran format (`.6403182E-02`, `0.00630`). Units are read from the header;
+    `units` is used where the header states none (default g) and must agree where it does. `name`
+    defaults to the event line of the classic layout, else the file's stem.
     """
     source = Path(path)
     lines = _read_lines(source)
-    if len(lines) < _HEADER_LINES:
-        raise JaxrockInputError(
-            f"{source}: only {len(lines)} line(s); an .AT2 file needs {_HEADER_LINES} header lines "
-            f"(the fourth with NPTS= and DT=) followed by the values"
-        )
-    npts, dt = _at2_npts_dt(lines[_HEADER_LINES - 1], source)
-    _, _, values = _numeric_rows(lines[_HEADER_LINES:], _HEADER_LINES + 1, source)
+    n_header, npts, dt = _at2_header(lines, source)
+    _, _, values = _numeric_rows(lines[n_header:], n_header + 1, source)
     if values.size != npts:
         fewer_more = "fewer" if values.size < npts else "more"
         raise JaxrockInputError(
             f"{source}: {values.size} values after the header, {fewer_more} than NPTS = {npts} "
-            f"(line {_HEADER_LINES}); the file must hold exactly NPTS values"
+            f"(line {n_header}); the file must hold exactly NPTS values"
         )
-    factor = _at2_units(lines, units, source)
-    event = lines[1].strip()
+    factor = _at2_units(lines[: n_header - 1], units, source)
+    event = lines[1].strip() if n_header == _HEADER_LINES else ""  # the classic layout's event line
     return Record(values * factor, dt, name=name or event or source.stem)
 
 
@@ -272,14 +310,15 @@ def _list_entries(path: Path) -> list[str]:
     return entries
 
 
-def read_records(sources, *, units: str | None = None) -> list[Record]:
+def read_records(sources, *, units: str | None = None, _lists: tuple[str, ...] = ()) -> list[Record]:
     """Records for a suite: each source is a record file, a folder (its files ending in one of
     `RECORD_SUFFIXES`, any case, sorted by name), a list file (`*.list`: one such source per line,
     relative to the list's folder, `#` comments), a packaged record's name (`builtin_record`) or
     `builtin`, all five packaged records (El Centro first); a file or folder of such a name in the
     working directory is read instead. Files are read by `read_record` and named by their file stem
     (unique within a folder); `units` as there. A folder without record files, a missing file or
-    two records of one name is refused in one line."""
+    two records of one name is refused in one line, as is a list that names itself (directly or
+    through other lists)."""
     from ..scene import BUILTIN_SUITE, PACKAGED_RECORDS, RECORD_ALIASES
 
     out: list[Record] = []
@@ -290,7 +329,11 @@ def read_records(sources, *, units: str | None = None) -> list[Record]:
             continue
         path = Path(src)
         if path.is_file() and path.suffix.lower() == LIST_SUFFIX:
-            out += read_records(_list_entries(path), units=units)
+            here = os.path.realpath(path)
+            if here in _lists:
+                chain = " → ".join(map(str, (*_lists[_lists.index(here):], here)))
+                raise JaxrockInputError(f"records: the list {path} names itself ({chain}); a list may name only records, folders and other lists")
+            out += read_records(_list_entries(path), units=units, _lists=(*_lists, here))
             continue
         if path.is_dir():
             files = sorted(f for f in path.iterdir() if f.is_file() and f.suffix.lower() in RECORD_SUFFIXES)

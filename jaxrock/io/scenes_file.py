@@ -318,8 +318,11 @@ def read_scenes(path) -> Scenes:
     Raises `JaxrockInputError` at a bad row, naming the row, the column and the valid range.
     """
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise JaxrockInputError(f"{path}: scenes file not found")
+    if not path.is_file():
+        raise JaxrockInputError(f"{path}: the scenes file is {'a folder' if path.is_dir() else 'not a regular file (a FIFO, a device)'}; "
+                                "expected a CSV file")
     with csv_text(path, "scenes") as fh:
         reader = csv.reader(fh)
         try:
