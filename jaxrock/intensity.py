@@ -11,7 +11,8 @@ is read (its `scale` applied), in SI units:
   displacement. Records processed for a database (PEER's are band-passed) change by < 0.1 %.
 - `arias` [m/s]: Arias intensity π/(2g) ∫ a² dt (trapezoidal, g = 9.81 m/s²), of the samples as read.
 - `d5_95` [s]: significant duration (Trifunac and Brady 1975): the time between 5 % and 95 % of
-  the Arias intensity (`eqsig.im.calc_sig_dur`: samples strictly inside, so to within one dt).
+  the Arias intensity (`eqsig.im.calc_sig_dur`: samples strictly inside, so to within one dt);
+  NaN for a record without motion or too short to have both crossings.
 - `dt` [s], `duration` [s] = (n − 1) dt.
 
 A record's measure scales with the record (`pga`, `pgv`, `pgd` linearly, `arias` quadratically),
@@ -49,10 +50,23 @@ def record_measures(record) -> dict[str, float]:
         "pgv": float(corrected.pgv),
         "pgd": float(corrected.pgd),
         "arias": float(eqsig.im.calc_arias_intensity(raw)[-1]),
-        "d5_95": float(eqsig.im.calc_sig_dur(raw)),
+        "d5_95": _significant_duration(raw),
         "dt": dt,
         "duration": dt * (acc.size - 1),
     }
+
+
+def _significant_duration(signal) -> float:
+    """D5-95 [s]; NaN where it is undefined: a record without motion (Arias intensity 0) or one
+    too short for eqsig to find both crossings."""
+    import eqsig
+
+    if not np.any(signal.values):
+        return float("nan")
+    try:
+        return float(eqsig.im.calc_sig_dur(signal))
+    except (IndexError, ValueError):
+        return float("nan")
 
 
 def suite_measures(records):

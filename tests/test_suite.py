@@ -12,6 +12,7 @@ import jaxrock as jr
 from jaxrock.analyses import fragility
 from jaxrock import G
 from jaxrock.results import STATUS_NAMES
+from helpers import invoke
 
 RECORDS = Path(jr.__file__).parent / "data" / "records"  # the packaged records (jaxrock/data/README.md)
 
@@ -293,3 +294,21 @@ def test_interrupted_suite_resumes_to_the_same_numbers(tmp_path):
     a, b = (xr.open_zarr(tmp_path / d / "suite.zarr", chunks=None) for d in ("whole", "cut"))
     for name in ("least_scale", "bracket_low", "overturned", "fragility_median", "fragility_beta", "pga"):
         assert a[name].equals(b[name]), name
+
+
+def test_records_without_motion_or_too_short_for_a_duration(tmp_path):
+    """Issue 52: a 2-sample or an all-zero record in a suite was an IndexError inside eqsig's
+    significant duration. D5-95 is NaN where undefined (every other measure is still given), and
+    a record without motion is refused by the suite in one line, before any run."""
+    from jaxrock.intensity import record_measures
+    from jaxrock.io.records import read_record
+
+    two = jr.Record(np.array([0.1, 0.2]) * jr.G, 0.01, name="two")
+    m = record_measures(two)
+    assert np.isnan(m["d5_95"]) and m["pga"] == pytest.approx(0.2 * jr.G) and m["duration"] == pytest.approx(0.01)
+    zero = tmp_path / "zero.txt"
+    zero.write_text("".join(f"{i * 0.01:.2f} 0\n" for i in range(200)))
+    assert np.isnan(record_measures(read_record(zero))["d5_95"])
+    r = invoke("suite", zero, "--model", "rigid", "--height", 2, "--scale", "1,2", "--out", tmp_path / "s", "-q", "--yes")
+    assert r.exit_code == 2 and "zero: every sample is 0 (no ground motion)" in r.output, r.output
+    assert len(r.output.strip().splitlines()) == 1

@@ -196,6 +196,14 @@ def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None,
     return out
 
 
+def check_motion(records) -> None:
+    """A suite's records all move: a record whose samples are all 0 has no intensity to fit a
+    fragility against (and no significant duration)."""
+    still = [r.name for r in records if not np.any(np.asarray(r.acc))]
+    if still:
+        raise JaxrockInputError(f"records: {', '.join(still)}: every sample is 0 (no ground motion); a suite needs records that move")
+
+
 def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boot: int | None = None, store_dir=None,
               progress: bool = True, history: str | None = None, integrator=None, **quantities):
     """A record suite for each model kind of `models` (e.g. ("rigid", "spring", "spring-flexible")):
@@ -216,6 +224,7 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
         raise JaxrockInputError(f"models {list(models)}: a model kind given twice; name each once")
     check_grid("scale (record factors)", scale)  # the least overturning factor is the first of them that overturns
     _check_im(im)
+    check_motion(records)
     sweeps = [Sweep.make(m, records=records, scale=scale, integrator=integrator, **quantities) for m in models]  # every input checked first
     measures = suite_measures(sweeps[0].records)
     parts = []
@@ -232,4 +241,4 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
     return out
 
 
-__all__ = ["least_overturning_scale", "suite_fragility", "run_suite"]
+__all__ = ["check_motion", "least_overturning_scale", "suite_fragility", "run_suite"]

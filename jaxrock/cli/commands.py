@@ -445,7 +445,7 @@ def suite(
     column (figure 10 for a suite: median and 16-84 % band) and the fragility of each column
     (lognormal by maximum likelihood, bootstrap band), for each model."""
     from .._validate import JaxrockInputError, check_grid, check_writable
-    from ..analyses.suite import _check_im
+    from ..analyses.suite import _check_im, check_motion
 
     kinds = [k.strip() for k in model.split(",") if k.strip()]
     bad = [k for k in kinds if k not in model_kinds()]
@@ -469,6 +469,7 @@ def suite(
     from ..analyses.sweep import Sweep
 
     recs = read_records(records or [RECORD_ALIASES[1]], units=units)
+    check_motion(recs)
     seconds = max(float(r.t_end - r.t_start) for r in recs)
     runs = cost = 0.0
     for k in kinds:
