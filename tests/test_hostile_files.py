@@ -4,6 +4,7 @@ lock per file whatever its name, outputs with the user's umask, devices refused 
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
 
@@ -147,3 +148,38 @@ def test_simulate_run_time_waits_for_the_result(monkeypatch):
     monkeypatch.setattr(jax, "block_until_ready", lambda x: calls.append(1) or real(x))
     r = invoke("simulate", "--accel-ratio", 3)
     assert r.exit_code == 0 and "run time" in r.output and calls, r.output
+
+
+def _no_room(*args, **kwargs):
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+@pytest.mark.parametrize("where", ["batch results", "spectrum netCDF", "sweep store"])
+def test_a_full_disk_is_one_line_and_leaves_no_temporary(tmp_path, monkeypatch, where):
+    """ENOSPC (or a read-only disk, a quota, a file size limit) while writing batch results, a
+    spectrum or a store was a traceback, and a spectrum left `tmp_<pid>_…` behind. Now one line,
+    exit 2, and no temporary is left (finished work stays in its store or checkpoint)."""
+    import xarray as xr
+
+    from jaxrock.analyses import scenes
+    from jaxrock.io import store
+
+    monkeypatch.chdir(tmp_path)
+    if where == "batch results":
+        monkeypatch.setattr(scenes, "append_results", _no_room)
+        r = invoke("batch", write(tmp_path / "b.csv", SCENES), tmp_path / "r.csv", "-q")
+    elif where == "spectrum netCDF":
+        def partial(self, path, **kw):
+            open(path, "wb").write(b"CDF\x01")
+            _no_room()
+        monkeypatch.setattr(xr.Dataset, "to_netcdf", partial)
+        r = invoke("spectrum", "--n-omega", 2, "--n-accel", 2, "--refine", 0, "--out", tmp_path / "spec", "-q")
+    else:
+        def half(tmp, sweep, history):
+            tmp.mkdir()
+            _no_room()
+        monkeypatch.setattr(store, "_make", half)
+        r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--store", tmp_path / "s.zarr", "-q")
+    assert r.exit_code == 2 and "cannot write" in r.output and "No space left on device" in r.output, r.output
+    assert len(r.output.strip().splitlines()) == 1, r.output
+    assert not [p.name for p in tmp_path.rglob("tmp_*")]

@@ -239,3 +239,12 @@ def test_dask_cluster_writes_the_same_store_even_when_a_worker_is_killed(tmp_pat
         assert len(seen) == 8
         assert len(set(client.run(os.getpid).values()) & set(pids)) == 1  # the killed worker was replaced
     _same(here, again)
+
+
+@pytest.mark.parametrize("given", ["", ".", ".."])
+def test_store_naming_no_folder_of_its_own_is_refused(tmp_path, monkeypatch, given):
+    """Issue 52: `--store ""` and `--store .` were tracebacks (Path('.').with_name)."""
+    monkeypatch.chdir(tmp_path)
+    r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--store", given, "-q")
+    assert r.exit_code == 2 and "names the current or a parent folder, not a store" in r.output, r.output
+    assert len(r.output.strip().splitlines()) == 1 and not list(tmp_path.iterdir())

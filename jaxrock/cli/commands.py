@@ -366,6 +366,9 @@ def sweep(
     if scheduler is not None and devices is not None:
         raise JaxrockInputError("--devices applies to this process; with --scheduler each worker uses its own devices")
     devs = None if scheduler is not None else _local_devices(devices)
+    if store.name in ("", ".", ".."):
+        raise JaxrockInputError(f"--store {str(store)!r}: names the current or a parent folder, not a store; "
+                                "give a folder of its own, e.g. --store out/sweep.zarr")
     if store.exists() and not store.is_dir():
         raise JaxrockInputError(f"--store {store}: is a file; expected a Zarr store folder (new or made by this sweep)")
     check_writable("--store", store.with_name(store.name + ".lock"))

@@ -4,6 +4,7 @@ output locks, signals (stop at a safe point, say how to resume) and the status v
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 from pathlib import Path
 from typing import Optional
@@ -156,6 +157,10 @@ def _hold(path, what: str) -> None:
     _held.enter_context(exclusive(path, what))
 
 
+# the file system refused a write: no space, a quota, a file size limit, read-only or not permitted
+_NO_ROOM = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EACCES, errno.EPERM}
+
+
 def _guarded(fn):
     """A command: a `JaxrockInputError` becomes a one-line message and exit code 2; SIGINT and
     SIGTERM stop the run at its next safe point (`jaxrock.interrupt`) and exit 130 — a command
@@ -172,6 +177,12 @@ def _guarded(fn):
                 return fn(*args, **kwargs)
         except JaxrockInputError as e:
             _fail(str(e))
+        except OSError as e:
+            if e.errno not in _NO_ROOM:
+                raise
+            where = f" {e.filename}" if e.filename else " an output"
+            _fail(f"cannot write{where}: {e.strerror or e} (finished work kept in a store or checkpoint is resumed by "
+                  f"the same command); free space, or choose a writable path")
         except KeyboardInterrupt:
             typer.echo("interrupted: nothing kept", err=True)
             raise typer.Exit(EXIT_INTERRUPTED) from None

@@ -77,12 +77,22 @@ def open_for(path, sweep, history: str | None = None) -> None:
         made = _made_by(path)
         refuse_if_different(made, sweep.description(), f"store {path}", _fresh(path))
         return
-    import xarray as xr
-    import zarr
-
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f"tmp_{os.getpid()}_{path.name}")
     shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        _make(tmp, sweep, history)
+        os.replace(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)  # a full disk, an interruption: no half-made store left behind
+        raise
+
+
+def _make(tmp: Path, sweep, history: str | None) -> None:
+    """The empty store of `sweep`, at `tmp`."""
+    import xarray as xr
+    import zarr
+
     attrs = {**sweep.attrs(), **({"history": history} if history else {})}
     xr.Dataset(coords=_coordinates(sweep), attrs=attrs).to_zarr(tmp, mode="w", zarr_format=3, consolidated=False)
     group = zarr.open_group(tmp, mode="r+")
@@ -98,7 +108,6 @@ def open_for(path, sweep, history: str | None = None) -> None:
     with warnings.catch_warnings():  # "not part of the format 3 specification": xarray reads it, and warns without it
         warnings.simplefilter("ignore")
         zarr.consolidate_metadata(tmp, zarr_format=3)  # the metadata never changes after: chunk writes only
-    os.replace(tmp, path)
 
 
 def _made_by(path: Path) -> dict:
