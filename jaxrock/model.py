@@ -287,7 +287,62 @@ def simulate(
       at construction; under `jax.vmap`/`jax.jit`, where it cannot be, the run returns
       `Status.invalid_input` with NaN numbers.
     """
-    return run_scene(*scene_arguments(model, excitation, integrator=integrator, save=save, t1=t1))
+    args = scene_arguments(model, excitation, integrator=integrator, save=save, t1=t1)
+    if _in_reverse_mode() and not _checkpointed(*args):  # JAX would fail later, in its backward pass, in its own words
+        raise JaxrockInputError(_autodiff_advice("Reverse-mode differentiation does not work for lax.while_loop", model, args[2]))
+    try:
+        return run_scene(*args)
+    except (TypeError, ValueError) as e:  # JAX's words for a derivative the integrator's loops cannot take
+        advice = _autodiff_advice(str(e), args[0], args[2])
+        if advice is None:
+            raise
+        raise JaxrockInputError(advice) from None
+
+
+def _in_reverse_mode() -> bool:
+    """Whether this call is being traced for reverse mode (`jax.grad`, `jax.vjp`, `jax.jacrev`):
+    one of the traces around it linearizes. JAX has no public query for it: read from its trace
+    stack where it is there (jax >= 0.4.36), else unknown (False)."""
+    try:
+        from jax._src import core
+        from jax._src.interpreters import ad
+
+        trace = core.trace_ctx.trace
+        while trace is not None:
+            if isinstance(trace, ad.LinearizeTrace):
+                return True
+            trace = getattr(trace, "parent_trace", None)
+    except (ImportError, AttributeError):
+        pass
+    return False
+
+
+def _checkpointed(model, excitation, integrator, save, t1) -> bool:
+    """Whether the run's loop is reverse-mode differentiable (`AbstractStepper.checkpointed`),
+    found by tracing its stepper abstractly."""
+    found = {}
+
+    def build():
+        found["checkpointed"] = model.stepper(integrator, save, t1).checkpointed
+        return jnp.zeros(())
+
+    jax.eval_shape(build)
+    return found["checkpointed"]
+
+
+def _autodiff_advice(error: str, model, integrator) -> str | None:
+    """What to change where JAX refuses to differentiate a run: forward mode (`jax.jvp`,
+    `jax.jacfwd`) through a reverse-mode integrator, or reverse mode (`jax.grad`, `jax.vjp`,
+    `jax.jacrev`) through a loop that only forward mode can enter (generalized-α)."""
+    name = type(integrator).__name__
+    if "forward-mode autodiff (jvp) to a custom_vjp" in error:
+        return (f"jax.jvp/jax.jacfwd cannot differentiate {name} in reverse mode (autodiff='reverse'); pass "
+                f"integrator=model.default_integrator(autodiff='forward') (the same settings, forward mode), or use jax.grad")
+    if "Reverse-mode differentiation does not work for lax.while_loop" in error:
+        return (f"jax.grad/jax.vjp/jax.jacrev cannot differentiate {name}: its steps differentiate in forward mode only; use "
+                f"jax.jacfwd or jax.jvp (one pass per parameter), or for the quasi-rigid spring the default Tsit5 integrator "
+                f"(SpringModel without a column), which differentiates either way")
+    return None
 
 
 def scene_arguments(model: AbstractModel, excitation: AbstractExcitation, *, integrator: AbstractIntegrator | None = None,

@@ -107,3 +107,34 @@ def test_run_batch_with_mismatched_batch_sizes_is_refused():
         jr.run_batch(models, pulses, model_batched=True)
     with pytest.raises(JaxrockInputError, match="one is a scalar"):
         jr.run_batch(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), jr.RickerPulse(5.0, 6.0))
+
+
+def test_forward_mode_through_a_reverse_mode_integrator_says_which_setting_can():
+    """Issue 52: `jax.jacfwd` through the rigid model's default (reverse-mode) integrator was a raw
+    JAX error ("can't apply forward-mode autodiff (jvp) to a custom_vjp function"). It now names
+    the setting that works (that it gives the reverse-mode derivative: test_gradients'
+    central-difference test, parametrized over both modes)."""
+    block = jr.Block.from_slenderness(10.0, 0.2)
+
+    def rigid(a_p):
+        return jr.simulate(jr.RigidModel(block), jr.RickerPulse(a_p, 6.0)).max_theta
+
+    with pytest.raises(JaxrockInputError, match=re.escape("pass integrator=model.default_integrator(autodiff='forward')")):
+        jax.jacfwd(rigid)(5.0)
+
+
+def test_reverse_mode_through_generalized_alpha_says_which_setting_can():
+    """Issue 52: `jax.grad` through the flexible model's default generalized-α (forward mode only)
+    was a raw JAX error raised in the backward pass ("Reverse-mode differentiation does not work
+    for lax.while_loop"). `simulate` now sees the reverse-mode trace and names what works, also
+    under vmap; `jax.jacfwd` still runs."""
+    block = jr.Block.from_slenderness(10.0, 0.2)
+
+    def flexible(cbar):
+        return jr.simulate(jr.SpringModel(block, jr.Column(30e9), cbar=cbar, n_elements=2), jr.RickerPulse(5.0, 6.0)).max_theta
+
+    with pytest.raises(JaxrockInputError, match=re.escape("its steps differentiate in forward mode only; use jax.jacfwd or jax.jvp")):
+        jax.grad(flexible)(0.05)
+    with pytest.raises(JaxrockInputError, match="forward mode only"):
+        jax.grad(lambda c: jax.vmap(flexible)(c).sum())(jnp.asarray([0.05, 0.06]))
+    assert np.isfinite(float(jax.jacfwd(flexible)(0.05)))

@@ -183,3 +183,37 @@ def test_a_full_disk_is_one_line_and_leaves_no_temporary(tmp_path, monkeypatch, 
     assert r.exit_code == 2 and "cannot write" in r.output and "No space left on device" in r.output, r.output
     assert len(r.output.strip().splitlines()) == 1, r.output
     assert not [p.name for p in tmp_path.rglob("tmp_*")]
+
+
+@pytest.mark.parametrize("damage", ['{"key": {"mode": "quick"}, "rows": [{"a": 1', '{"rows": []}', '[1, 2]',
+                                    '{"key": {"mode": "quick"}, "rows": [{"b": 2}]}', '{"key": {"mode": "quick"}, "rows": 3}'])
+def test_a_damaged_kept_part_is_run_again(tmp_path, damage):
+    """Issue 52: kept-step JSON files of `stability`/`work-precision` that were truncated or lacked
+    keys were tracebacks (JSONDecodeError, KeyError); each such part now runs again, and a part
+    kept whole is still read back, not run."""
+    from jaxrock.numerics.kept import run_parts
+
+    ran = []
+
+    def run(part):
+        ran.append(part)
+        return [{"a": part, "b": 2 * part}]
+
+    key = {"mode": "quick"}
+    args = dict(name=str, desc="t", progress=False, columns=("a", "b"))
+    assert run_parts([1, 2], run, tmp_path, key, **args) == [{"a": 1, "b": 2}, {"a": 2, "b": 4}]
+    (tmp_path / "1.json").write_text(damage)
+    ran.clear()
+    assert run_parts([1, 2], run, tmp_path, key, **args) == [{"a": 1, "b": 2}, {"a": 2, "b": 4}]
+    assert ran == [1]
+
+
+@pytest.mark.parametrize("damage", ['{"mode": "quick", "version"', '{"mode": "quick"}', '{"mode": "quick", "version": "V", "findings": [{"x": 1}], "seconds": 1}'])
+def test_a_damaged_kept_step_of_reproduce_is_run_again(tmp_path, monkeypatch, damage):
+    """The same for `reproduce`'s kept steps (a truncated file or missing keys gave a KeyError)."""
+    from jaxrock.paper import reproduce
+
+    monkeypatch.setattr(reproduce, "_version", lambda: "V")
+    path = tmp_path / "step.json"
+    path.write_text(damage)
+    assert reproduce._kept(path, "quick") is None

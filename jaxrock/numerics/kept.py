@@ -28,10 +28,29 @@ def write_csv(path: Path, columns: tuple[str, ...], rows: list[dict]) -> None:
     write_text(path, "\n".join([",".join(columns)] + [",".join(cell(r[c]) for c in columns) for r in rows]) + "\n")
 
 
-def run_parts(parts, run, folder: Path, key: dict, *, name, desc: str, progress: bool) -> list[dict]:
-    """The rows of `run(part)` for every part, each part's kept in `folder/<name(part)>.json` with
-    `key` (mode and version): a part kept under the same key is read back, not run; a signal stops
-    the run after the part in progress (`jaxrock.interrupt.stop_point`), with it kept."""
+def read_kept(path: Path, check) -> object | None:
+    """`check(data)` of the JSON object kept in `path`; None where the file is missing, truncated,
+    not an object, or `check` finds a key missing or of another type (the part is then run
+    again, never taken as done)."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        return check(data) if isinstance(data, dict) else None
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+
+
+def _rows(stored: dict, key: dict, columns: tuple[str, ...]) -> list[dict] | None:
+    rows = stored["rows"]
+    if stored["key"] != key or not isinstance(rows, list) or not all(isinstance(r, dict) and set(columns) <= set(r) for r in rows):
+        return None
+    return rows
+
+
+def run_parts(parts, run, folder: Path, key: dict, *, name, desc: str, progress: bool, columns: tuple[str, ...]) -> list[dict]:
+    """The rows of `run(part)` (each with every one of `columns`) for every part, each part's kept
+    in `folder/<name(part)>.json` with `key` (mode and version): a part kept under the same key is
+    read back, not run (a damaged file is run again: `read_kept`); a signal stops the run after the
+    part in progress (`jaxrock.interrupt.stop_point`), with it kept."""
     from tqdm.auto import tqdm
 
     from ..interrupt import stop_point
@@ -40,9 +59,9 @@ def run_parts(parts, run, folder: Path, key: dict, *, name, desc: str, progress:
     rows = []
     for part in tqdm(parts, desc=desc, unit="part", disable=not progress):
         path = folder / f"{name(part)}.json"
-        stored = json.loads(path.read_text()) if path.exists() else None
-        if stored is not None and stored["key"] == key:
-            rows.extend(stored["rows"])
+        kept = read_kept(path, lambda stored: _rows(stored, key, columns))
+        if kept is not None:
+            rows.extend(kept)
             continue
         new = run(part)
         write_text(path, json.dumps({"key": key, "rows": new}))

@@ -217,7 +217,7 @@ def stability(out: Path, *, quick: bool = False, progress: bool = True) -> list[
     n_elements = 4 if quick else 10
     key = {"quick": quick, "version": package_version()}
     rows = run_parts(cases, lambda c: run_case(c, n_elements), out / "stability_cases", key,
-                     name=lambda c: f"{CASES.index(c):02d}", desc="stability", progress=progress)
+                     name=lambda c: f"{CASES.index(c):02d}", desc="stability", progress=progress, columns=COLUMNS)
     write(out, rows, quick=quick, n_elements=n_elements)
     return rows
 

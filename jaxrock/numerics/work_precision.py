@@ -365,7 +365,7 @@ def work_precision(out: Path, *, quick: bool = False, progress: bool = True) -> 
     s = Settings.make(quick)
     key = {"quick": quick, "version": package_version(), "opensees": s.opensees}
     rows = run_parts(PANELS, lambda p: run_panel(p, s), out / "work_precision_panels", key, name=lambda p: p.name,
-                     desc="work-precision", progress=progress)
+                     desc="work-precision", progress=progress, columns=COLUMNS)
     write(out, rows, s)
     return rows
 

@@ -84,13 +84,16 @@ class Report:
 
 
 def _kept(path: Path, mode: str) -> tuple[list[Finding], float] | None:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    if data.get("mode") != mode or data.get("version") != _version():
-        return None
-    return [Finding(**row) for row in data["findings"]], float(data["seconds"])
+    """A step's kept findings, or None where they are of another mode or version, or the file is
+    damaged (truncated, keys missing): the step then runs again."""
+    from ..numerics.kept import read_kept
+
+    def check(data):
+        if data["mode"] != mode or data["version"] != _version():
+            return None
+        return [Finding(**row) for row in data["findings"]], float(data["seconds"])
+
+    return read_kept(path, check)
 
 
 def reproduce(out="out/reproduce", *, quick: bool = False, only=None, progress: bool = True) -> Report:
