@@ -248,3 +248,15 @@ def test_store_naming_no_folder_of_its_own_is_refused(tmp_path, monkeypatch, giv
     r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--store", given, "-q")
     assert r.exit_code == 2 and "names the current or a parent folder, not a store" in r.output, r.output
     assert len(r.output.strip().splitlines()) == 1 and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("address, needle", [("garbage", "not a scheduler address"), ("", "not a scheduler address"),
+                                             ("tcp://127.0.0.1:1", "no Dask scheduler answers there")])
+def test_scheduler_that_is_no_address_or_answers_nothing_is_one_line(tmp_path, address, needle):
+    """Issue 52: `--scheduler garbage` or `""` waited 10 s, printed a clean line, then a
+    `Client.__del__` traceback after a 20 s close timeout. The address is now checked and probed
+    before any Dask client exists: one line, exit 2, within seconds, no store made."""
+    pytest.importorskip("distributed")
+    r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--store", tmp_path / "s.zarr", "-q", "--scheduler", address)
+    assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert not (tmp_path / "s.zarr").exists()

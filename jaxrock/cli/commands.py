@@ -4,6 +4,7 @@ written by `jaxrock.reports` and the analyses themselves."""
 from __future__ import annotations
 
 import math
+import re
 import time
 from pathlib import Path
 from typing import Optional
@@ -388,6 +389,7 @@ def sweep(
             from distributed import Client
         except ImportError:
             raise JaxrockInputError("--scheduler needs Dask's distributed: pip install 'jaxrock[distributed]'") from None
+        _probe_scheduler(scheduler)
         try:
             client = guards._held.enter_context(Client(scheduler, timeout="10s", set_as_default=False))  # dask.compute elsewhere stays local
         except Exception as e:  # refused, timed out, or not an address: one answer
@@ -422,6 +424,29 @@ def sweep(
                f"{int(ds.uplifted.sum()):,}")
     typer.echo(f"wrote {store}")
     _exit_if_untrusted(_status_counts(ds.status.values), "scene(s)")
+
+
+_SCHEDULER = re.compile(r"^(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.-]+):(\d{1,5})$")
+
+
+def _probe_scheduler(address: str) -> None:
+    """`--scheduler`: an address (PROTOCOL://HOST:PORT or HOST:PORT) where something accepts a
+    TCP connection within 10 s, checked before a Dask client is made (a client that cannot connect
+    hangs in its own cleanup and prints tracebacks after the answer)."""
+    import socket
+
+    from .._validate import JaxrockInputError
+
+    m = _SCHEDULER.match(address.strip())
+    if m is None or not 0 < int(m.group(3)) < 65536:
+        raise JaxrockInputError(f"--scheduler {address!r}: not a scheduler address; expected tcp://HOST:PORT (or HOST:PORT; "
+                                "tls://, ws://, ucx:// also), as `dask scheduler` prints it")
+    host, port = m.group(2).strip("[]"), int(m.group(3))
+    try:
+        socket.create_connection((host, port), timeout=10).close()
+    except OSError as e:
+        raise JaxrockInputError(f"--scheduler {address}: no Dask scheduler answers there within 10 s ({e.strerror or e}); "
+                                "expected a running scheduler's address, tcp://HOST:PORT") from None
 
 
 @app.command()
