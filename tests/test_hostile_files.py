@@ -7,6 +7,8 @@ from __future__ import annotations
 import errno
 import os
 import stat
+import subprocess
+import sys
 
 import pytest
 from helpers import invoke, write
@@ -217,3 +219,19 @@ def test_a_damaged_kept_step_of_reproduce_is_run_again(tmp_path, monkeypatch, da
     path = tmp_path / "step.json"
     path.write_text(damage)
     assert reproduce._kept(path, "quick") is None
+
+
+def test_work_precision_leaves_out_an_openseespy_that_cannot_load(tmp_path):
+    """Issue 52: with OpenSeesPy installed but unable to load (its library missing a BLAS:
+    "Failed to import openseespy on Linux"), `jaxrock work-precision` crashed. The OpenSees panels
+    are now left out with one line saying why."""
+    fake = tmp_path / "openseespy"
+    fake.mkdir()
+    (fake / "__init__.py").write_text("")
+    (fake / "opensees.py").write_text("raise RuntimeError('Failed to import openseespy on Linux.')\n")
+    code = "from jaxrock.numerics.work_precision import Settings; print(Settings.make(quick=True).opensees)"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")])}
+    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.strip() == "False", r.stderr
+    assert "the OpenSees panels are left out: openseespy is installed but cannot load (RuntimeError: Failed to import" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr

@@ -90,9 +90,21 @@ class Settings:
 
 
 def _has_opensees() -> bool:
+    """Whether OpenSeesPy loads: not installed, or installed but unable to load (its compiled
+    library missing a BLAS or Python of its build: "Failed to import openseespy on Linux"), the
+    OpenSees panels are left out, the latter said in one line."""
     import importlib.util
 
-    return importlib.util.find_spec("openseespy") is not None
+    if importlib.util.find_spec("openseespy") is None:
+        return False
+    try:
+        import openseespy.opensees  # noqa: F401
+    except Exception as e:  # openseespy raises RuntimeError, ImportError or OSError as its loader fails
+        why = " ".join(str(e).split())[:200]
+        print(f"work-precision: the OpenSees panels are left out: openseespy is installed but cannot load "
+              f"({type(e).__name__}: {why})", file=sys.stderr)
+        return False
+    return True
 
 
 # -- scenes ------------------------------------------------------------------------------------
