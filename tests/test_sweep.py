@@ -260,3 +260,31 @@ def test_scheduler_that_is_no_address_or_answers_nothing_is_one_line(tmp_path, a
     r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--store", tmp_path / "s.zarr", "-q", "--scheduler", address)
     assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
     assert not (tmp_path / "s.zarr").exists()
+
+
+def test_a_sweep_of_a_trillion_chunks_starts_resumes_and_stops_at_once(tmp_path):
+    """Issue 52: a sweep of 10¹⁵ scenes (9.8e11 chunks) acknowledged SIGTERM and ran on for minutes
+    (its chunk flags were read whole, 1 TB, and its to-do list built in full; once a MemoryError).
+    The flags beyond 2^24 chunks are read from the flag files present, the to-do list is lazy, and
+    a stop asked before the first chunk ends the run at once with the finished chunks counted."""
+    import time
+
+    from jaxrock import interrupt
+    from jaxrock.io import store as zstore
+
+    axis = lambda a, b: np.linspace(a, b, 100_000)
+    sw = Sweep.make("rigid", accel_ratio=axis(0.5, 10), omega_ratio=axis(1, 15), height=axis(1, 10))
+    assert sw.n_chunks > 1e11
+    path = tmp_path / "huge.zarr"
+    zstore.open_for(path, sw)
+    for k in (0, 7):
+        zstore.write_chunk(path, sw, k, {name: np.zeros(sw.chunk_shape, dtype=dtype)
+                                         for name, (dtype, _, _) in zstore._variables().items()})
+    t0 = time.perf_counter()
+    assert zstore.survey(path, sw) == ({0, 7}, {})
+    with interrupt.deferred_signals():
+        interrupt._pending = signal.SIGTERM
+        with pytest.raises(interrupt.Interrupted):
+            run_sweep(sw, path, progress=False)
+    assert zstore.flagged(path, sw) == {0, 7}
+    assert time.perf_counter() - t0 < 20

@@ -402,9 +402,9 @@ def _run(sweep, store, client, devices, progress, on_chunk):
             zstore.unflag(store, damaged)  # a rerun cut short leaves them to run again, never as done
             for k, why in damaged.items():
                 print(f"store {store}: chunk {k} is damaged ({why}); running it again", file=sys.stderr)
-    todo = [k for k in range(sweep.n_chunks) if k not in done]
+    todo = (k for k in range(sweep.n_chunks) if k not in done)  # lazily: a sweep may have more chunks than memory holds
     held = {}
-    bar = tqdm(total=sweep.size, initial=sweep.size - sum(sweep.chunk_scenes(k) for k in todo), unit="scene", desc="sweep",
+    bar = tqdm(total=sweep.size, initial=sum(sweep.chunk_scenes(k) for k in done), unit="scene", desc="sweep",
                disable=not progress, smoothing=0.1)
 
     def finished_chunk(k):
@@ -432,7 +432,7 @@ def _run(sweep, store, client, devices, progress, on_chunk):
                 if pending is not None:
                     finished_chunk(pending.result())
         else:
-            _run_on_cluster(client, os.path.abspath(store), sweep, todo, finished_chunk)  # workers may start elsewhere
+            _run_on_cluster(client, os.path.abspath(store), sweep, list(todo), finished_chunk)  # workers may start elsewhere
     finally:
         bar.close()
     if store is None:

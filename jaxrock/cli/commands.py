@@ -410,7 +410,7 @@ def sweep(
         ds = run_sweep(sw, store, client=client, devices=devs, progress=not quiet,
                        history=_history(), on_chunk=count)
     except Interrupted:
-        kept = len(zstore.finished(store, sw)) if store.exists() else 0
+        kept = len(zstore.flagged(store, sw)) if store.exists() else 0
         typer.echo(f"interrupted: {kept} of {sw.n_chunks} chunks kept in {store}; resume with: {_resume_command()}", err=True)
         raise typer.Exit(EXIT_INTERRUPTED) from None
     seconds = time.perf_counter() - t0

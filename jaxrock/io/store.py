@@ -139,17 +139,7 @@ def survey(path, sweep) -> Survey:
 
     path = Path(path)
     group = zarr.open_group(path, mode="r")
-    done_flags = group["chunk_done"]
-    try:  # one read; a damaged flag file fails it, and then each flag is read alone
-        flagged = {int(k) for k in np.flatnonzero(done_flags[...] == 1)}
-    except Exception:
-        flagged = set()
-        for k in range(sweep.n_chunks):
-            try:
-                if done_flags[k] == 1:
-                    flagged.add(k)
-            except Exception:
-                pass
+    flagged = _flagged(path, sweep, group["chunk_done"])
     arrays = {name: group[name] for name in _variables()}
     done, damaged = set(), {}
     for k in sorted(flagged):
@@ -168,6 +158,37 @@ def survey(path, sweep) -> Survey:
         else:
             done.add(k)
     return Survey(done, damaged)
+
+
+_ONE_READ = 1 << 24  # flags read in one go up to this many chunks (16 MB); beyond, only the flag files there are read
+
+
+def _flagged(path: Path, sweep, flags) -> set[int]:
+    """The chunks flagged finished. Up to `_ONE_READ` chunks in one read; beyond it (a sweep of
+    10¹² chunks has flags no memory holds), or where a damaged flag file fails that read, each
+    flag file present (one per chunk ever flagged) is read alone, a damaged one as not finished."""
+    if sweep.n_chunks <= _ONE_READ:
+        try:
+            return {int(k) for k in np.flatnonzero(flags[...] == 1)}
+        except Exception:
+            pass
+    folder = path / "chunk_done" / "c"
+    listed = sorted(int(n) for n in (os.listdir(folder) if folder.is_dir() else ()) if n.isdigit() and int(n) < sweep.n_chunks)
+    out = set()
+    for k in listed:
+        try:
+            if flags[k] == 1:
+                out.add(k)
+        except Exception:
+            pass
+    return out
+
+
+def flagged(path, sweep) -> set[int]:
+    """The chunks flagged finished, without reading their outputs back (`survey` checks them)."""
+    import zarr
+
+    return _flagged(Path(path), sweep, zarr.open_array(Path(path) / "chunk_done", mode="r"))
 
 
 def finished(path, sweep) -> set[int]:
@@ -239,4 +260,4 @@ def in_memory(sweep, chunks: dict[int, dict]):
     return xr.Dataset(data, coords=_coordinates(sweep), attrs=sweep.attrs())
 
 
-__all__ = ["NOT_RUN", "Survey", "finished", "survey", "unflag", "in_memory", "kept_scenes", "load", "open_for", "write_chunk"]
+__all__ = ["NOT_RUN", "Survey", "finished", "survey", "unflag", "flagged", "in_memory", "kept_scenes", "load", "open_for", "write_chunk"]
