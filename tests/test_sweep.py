@@ -93,7 +93,7 @@ def test_sweep_refuses_bad_values_in_one_line(tmp_path):
         (["--accel-ratio", "0,1"], "accel_ratio"),
         (["--height", "5", "--tan-alpha", "0.3", "--tan-alpha-base", "0.2"], "tan_alpha_base"),
         (["--model", "spring-flexible", "--E", "1e3,3e10"], "E (Young's modulus) [Pa] = 1000 is outside the valid range [1e+06, 1e+15]"),
-        (["--scheduler", "-q"], "--scheduler -q: no Dask scheduler answers there"),  # a flag taken for the address
+        (["--scheduler", "-q"], "--scheduler '-q': not a scheduler address"),  # a flag taken for the address
     ):
         if args == ["--eta", "0.5"]:
             continue
