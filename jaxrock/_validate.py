@@ -74,6 +74,9 @@ def check_range(
     bad = ~in_range(v, lo, hi, lo_open=lo_open, hi_open=hi_open)
     if bad.any():
         first = v[bad][0]
+        if not np.isfinite(first):
+            valid = "any finite number" if math.isinf(lo) and math.isinf(hi) else f"finite, in {rng}"
+            raise JaxrockInputError(f"{name} = {first:g} is not a finite number; valid: {valid}")
         raise JaxrockInputError(f"{name} = {first:g} is outside the valid range {rng}")
 
 
@@ -134,6 +137,19 @@ def check_grid(name: str, values, lo: float = 0.0) -> np.ndarray:
     return v
 
 
+MADE_FOLDERS: list = []  # folders `check_writable` made in this process (a refused command removes them while empty)
+
+
+def remove_made_folders() -> None:
+    """Remove the folders `check_writable` made that are still empty, innermost first: a command
+    refused after its outputs were checked leaves no empty folder behind."""
+    while MADE_FOLDERS:
+        try:
+            MADE_FOLDERS.pop().rmdir()
+        except OSError:  # not empty (something was written), or gone
+            pass
+
+
 def check_writable(name: str, path) -> None:
     """`path` can be written (its folder is created): probed by writing, not by permission bits,
     so that a run fails here, before its work, not after it."""
@@ -149,7 +165,9 @@ def check_writable(name: str, path) -> None:
     if path.exists() and not path.is_file():
         raise JaxrockInputError(f"{name} {path}: is not a regular file (a device, a FIFO or a socket); expected a file path")
     try:
+        missing = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
         path.parent.mkdir(parents=True, exist_ok=True)
+        MADE_FOLDERS.extend(reversed(missing))  # outermost first
         with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".jaxrock-write-test-"):
             pass
         if path.exists():

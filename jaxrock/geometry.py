@@ -24,8 +24,8 @@ import jax.numpy as jnp
 import equinox as eqx
 from jaxtyping import Array, Float
 
-from ._validate import JaxrockInputError, Limit, check_limits, check_positive, is_concrete
-from .scene import TAN_ALPHA_MIN, check_slenderness  # the valid slenderness (`jaxrock.scene`)
+from ._validate import JaxrockInputError, Limit, check_limits, check_positive, check_range, is_concrete
+from .scene import HEIGHT_RANGE, TAN_ALPHA_MIN, check_slenderness  # the valid slenderness (`jaxrock.scene`)
 
 G = 9.81  # m/s², SPEC
 
@@ -54,10 +54,10 @@ class Block(eqx.Module):
         check_limits(self.limits())
 
     def limits(self) -> tuple[Limit, ...]:
-        """The valid geometry (`jaxrock._validate.Limit`): sizes > 0, TAN_ALPHA_MIN ≤ tanα ≤ tanα′ < 1."""
+        """The valid geometry (`jaxrock._validate.Limit`): 2h in `HEIGHT_RANGE`, TAN_ALPHA_MIN ≤ tanα ≤ tanα′ < 1."""
         inf = math.inf
         return (
-            Limit("h (half-height) [m]", self.h, 0.0, inf, lo_open=True, hi_open=True),
+            Limit("h (half-height) [m]", self.h, 0.5 * HEIGHT_RANGE[0], 0.5 * HEIGHT_RANGE[1]),
             Limit("tan_alpha = b/h", self.b / self.h, TAN_ALPHA_MIN, 1.0, hi_open=True),
             Limit("b_base/b (base over column half-width)", self.b_base / self.b, 1 - 1e-12, inf, hi_open=True),
             Limit("tan_alpha_base = b_base/h", self.b_base / self.h, TAN_ALPHA_MIN, 1.0, hi_open=True),
@@ -67,7 +67,7 @@ class Block(eqx.Module):
     @classmethod
     def from_size(cls, height, width, base_width=None, *, exact_inertia: bool = True) -> "Block":
         """Column of full height `height` (2h) and width `width` (2b) [m]; optional base width (2b′)."""
-        check_positive("height (2h) [m]", height)
+        check_range("height (2h) [m]", height, *HEIGHT_RANGE)
         check_positive("width (2b) [m]", width)
         h = 0.5 * jnp.asarray(height, dtype=float)
         b = 0.5 * jnp.asarray(width, dtype=float)

@@ -138,3 +138,19 @@ def test_reverse_mode_through_generalized_alpha_says_which_setting_can():
     with pytest.raises(JaxrockInputError, match="forward mode only"):
         jax.grad(lambda c: jax.vmap(flexible)(c).sum())(jnp.asarray([0.05, 0.06]))
     assert np.isfinite(float(jax.jacfwd(flexible)(0.05)))
+
+
+@pytest.mark.parametrize(
+    "build, needle",
+    [
+        (lambda: jr.RickerPulse(np.inf, 6.0), "= inf is not a finite number; valid: any finite number"),
+        (lambda: jr.Block.from_slenderness(1e300, 0.2), "height (2h) [m] = 1e+300 is outside the valid range [1e-12, 1e+12]"),
+        (lambda: jr.Block.from_size(1e-13, 1e-14), "height (2h) [m] = 1e-13 is outside the valid range [1e-12, 1e+12]"),
+    ],
+)
+def test_messages_name_the_value_that_is_wrong(build, needle):
+    """Issue 52: "a_p = inf is outside the valid range [-inf, inf]"; `--height 1e300` refused as
+    "eta = nan …" (the inertia overflowed before the height was checked). Heights are bounded to
+    1e-12–1e12 m, where the dimensionless response was checked to be the same."""
+    with pytest.raises(JaxrockInputError, match=re.escape(needle)):
+        build()

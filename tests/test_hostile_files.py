@@ -235,3 +235,20 @@ def test_work_precision_leaves_out_an_openseespy_that_cannot_load(tmp_path):
     assert r.returncode == 0 and r.stdout.strip() == "False", r.stderr
     assert "the OpenSees panels are left out: openseespy is installed but cannot load (RuntimeError: Failed to import" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+def test_a_refused_run_leaves_no_empty_output_folder(tmp_path):
+    """Issue 52: a run refused after its --out was checked left the empty folder it had made."""
+    r = invoke("suite", tmp_path / "nosuch.AT2", "--model", "rigid", "--scale", "1,2", "--out", tmp_path / "new" / "deep", "-q")
+    assert r.exit_code == 2 and "no such file or folder" in r.output, r.output
+    assert not (tmp_path / "new").exists()
+
+
+def test_suite_refuses_to_write_into_its_records_folder(tmp_path):
+    """Issue 52: with --out the records folder, a rerun read the suite's own CSV outputs as records."""
+    recs = tmp_path / "recs"
+    recs.mkdir()
+    (recs / "r.txt").write_text("".join(f"{i * 0.01:.2f} {0.3 * (i % 7 - 3)}\n" for i in range(300)))
+    r = invoke("suite", recs, "--model", "rigid", "--scale", "1,2", "--out", recs, "-q", "--yes")
+    assert r.exit_code == 2 and "is the records folder" in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    assert sorted(p.name for p in recs.iterdir()) == ["r.txt"]

@@ -4,6 +4,7 @@ written by `jaxrock.reports` and the analyses themselves."""
 from __future__ import annotations
 
 import math
+import os
 import re
 import time
 from pathlib import Path
@@ -496,6 +497,10 @@ def suite(
     from ..io.records import read_records
     from ..analyses.sweep import Sweep
 
+    for src in records or ():
+        if Path(src).is_dir() and os.path.realpath(src) == os.path.realpath(out):
+            raise JaxrockInputError(f"--out {out}: is the records folder {src}; the suite's CSV outputs would be read as records "
+                                    "on a rerun: choose another --out")
     recs = read_records(records or [RECORD_ALIASES[1]], units=units)
     check_motion(recs)
     seconds = max(float(r.t_end - r.t_start) for r in recs)

@@ -169,17 +169,20 @@ def _guarded(fn):
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         global _held
-        from .._validate import JaxrockInputError
+        from .._validate import MADE_FOLDERS, JaxrockInputError, remove_made_folders
         from ..interrupt import deferred_signals
 
+        MADE_FOLDERS.clear()
         try:
             with deferred_signals(), contextlib.ExitStack() as _held:
                 return fn(*args, **kwargs)
         except JaxrockInputError as e:
+            remove_made_folders()
             _fail(str(e))
         except OSError as e:
             if e.errno not in _NO_ROOM:
                 raise
+            remove_made_folders()
             where = f" {e.filename}" if e.filename else " an output"
             _fail(f"cannot write{where}: {e.strerror or e} (finished work kept in a store or checkpoint is resumed by "
                   f"the same command); free space, or choose a writable path")
