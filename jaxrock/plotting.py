@@ -38,12 +38,27 @@ Y_LABEL = r"$a_p/(g\,\tan\alpha)$"
 CBAR_LABEL = r"$\theta_{\max}/\alpha$"
 
 
+_CREATOR = {"png": "Software", "pdf": "Creator", "svg": "Creator", "ps": "Creator", "eps": "Creator"}  # metadata key per format
+
+
+def save_figure(fig, path, dpi: int = 150) -> Path:
+    """`fig` written to `path`, its format from the suffix, never over a file jaxrock did not write
+    (`jaxrock.io.files.refuse_foreign`); the formats that carry metadata name jaxrock in it."""
+    from .io.files import refuse_foreign
+
+    path = Path(path)
+    refuse_foreign(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    key = _CREATOR.get(path.suffix[1:].lower())
+    meta = {key: f"jaxrock, with Matplotlib {matplotlib.__version__}"} if key else None
+    fig.savefig(path, dpi=dpi, bbox_inches="tight", metadata=meta)
+    return path
+
+
 def _finish(fig, path, data):
     fig.jaxrock_data = data
     if path is not None:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=150, bbox_inches="tight")
+        save_figure(fig, path)
     return fig
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from .analyses.calibration import CALIBRATION_ANGLES, CalibrationResult, PowerLawFit, calibrate_cbar, fit_power_law, rm_targets, warm_up
 from .analyses.fragility import BETA_MIN
 from .analyses.free_rocking import FIG7_CBARS, FIG7_TAN_ALPHAS, SpringFamily, energy_ratio_grid
-from .io.files import write_atomically
+from .io.files import text_head, write_output
 from .io.tables import write_table
 from .plotting import plot_calibration, plot_energy_ratio, plot_record_spectrum, plot_spectrum
 
@@ -193,8 +193,8 @@ def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
     note = (f"Lognormal fragility P = Φ(ln(x/θ)/β) by maximum likelihood of every record × factor outcome of the sweep "
             f"(Baker 2015, multiple stripes), x = {im}; intervals: bootstrap over records ({ds.fragility_median_boot.sizes['bootstrap']} "
             f"resamplings). β = {BETA_MIN:g} marks outcomes one intensity separates exactly.")
-    files["table"] = write_atomically(out / "fragility.md", lambda tmp: Path(tmp).write_text(f"# {title}" + "".join(f", {k} = {v:g}" for k, v in fixed.items()) + "\n\n" + "\n".join(md) + f"\n\n{note}\n",
-                                                                                          encoding="utf-8"))
+    text = f"# {title}" + "".join(f", {k} = {v:g}" for k, v in fixed.items()) + "\n\n" + "\n".join(md) + f"\n\n{note}\n"
+    files["table"] = write_output(out / "fragility.md", lambda tmp: Path(tmp).write_text(text, encoding="utf-8"), text_head(text))
     plt.close(plot_suite_scales(ds, path=out / "least_scale.png", title=f"{title}: least overturning scale factor"))
     plt.close(plot_fragility(ds, path=out / "fragility.png", title=f"{title}: fragility"))
     files["least_scale_png"], files["fragility_png"] = out / "least_scale.png", out / "fragility.png"

@@ -252,3 +252,37 @@ def test_suite_refuses_to_write_into_its_records_folder(tmp_path):
     r = invoke("suite", recs, "--model", "rigid", "--scale", "1,2", "--out", recs, "-q", "--yes")
     assert r.exit_code == 2 and "is the records folder" in r.output and len(r.output.strip().splitlines()) == 1, r.output
     assert sorted(p.name for p in recs.iterdir()) == ["r.txt"]
+
+
+def test_outputs_replace_only_files_jaxrock_wrote(tmp_path):
+    """Issue 52's rule for every command: an output replaces a file jaxrock wrote (a netCDF or a
+    figure names jaxrock in its first bytes; a CSV or a report starts as the new one will), never
+    an unrelated file without --force, never through a symbolic link."""
+    notes = write(tmp_path / "spec.nc", "my notes\n")
+    args = ["spectrum", "--n-omega", 2, "--n-accel", 2, "--refine", 0, "--out", tmp_path / "spec", "-q"]
+    r = invoke(*args)
+    assert r.exit_code == 2 and "spec.nc: exists and was not written by jaxrock; pass --force" in r.output, r.output
+    assert notes.read_text() == "my notes\n" and not (tmp_path / "spec.checkpoint").exists()
+    assert invoke(*args, "--force").exit_code == 0
+    r = invoke(*args)  # its own outputs: replaced without --force
+    assert r.exit_code == 0, r.output
+    assert b"jaxrock" in (tmp_path / "spec.png").read_bytes()[:65536]
+
+    photo = write(tmp_path / "photo.png", "not a plot\n")
+    r = invoke("simulate", "--plot", photo, "--n-points", 20)
+    assert r.exit_code == 2 and "photo.png: exists and was not written by jaxrock" in r.output, r.output
+    (tmp_path / "link.pdf").symlink_to(photo)
+    r = invoke("simulate", "--plot", tmp_path / "link.pdf", "--n-points", 20, "--force")
+    assert r.exit_code == 2 and "is a symbolic link" in r.output and photo.read_text() == "not a plot\n", r.output
+
+
+def test_a_table_replaces_its_own_csv_only(tmp_path):
+    from jaxrock.io.tables import write_table
+
+    rows = [{"a": 1.0, "b": 2}]
+    write_table(tmp_path / "t.csv", rows)
+    write_table(tmp_path / "t.csv", rows)  # its own: the same header
+    write(tmp_path / "other.csv", "x,y\n1,2\n")
+    with pytest.raises(JaxrockInputError, match="other.csv: exists and was not written by jaxrock"):
+        write_table(tmp_path / "other.csv", rows)
+    assert (tmp_path / "other.csv").read_text() == "x,y\n1,2\n"

@@ -22,7 +22,7 @@ from .. import interrupt
 from .._validate import JaxrockInputError, check_grid
 from ..excitation import Record
 from ..io import provenance
-from ..io.files import write_atomically
+from ..io.files import write_output
 from ..model import AbstractIntegrator, AbstractModel
 from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module
 from ..geometry import pulse_of_ratios
@@ -104,7 +104,7 @@ class _AbstractSpectrum(eqx.Module):
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         ds = self.to_xarray()
-        return write_atomically(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))
+        return write_output(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))
 
     @classmethod
     def load(cls, path) -> "Spectrum":
@@ -274,7 +274,7 @@ class RecordSpectrum(eqx.Module):
             coords={"height": ("height", self.height, {"long_name": "2h", "units": "m"})},
             attrs={k: str(v) for k, v in self.attrs.items()},
         )
-        return write_atomically(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))
+        return write_output(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))
 
 
 def record_overturning_scale(

@@ -22,6 +22,8 @@ from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PUL
 from .options import (MAX_PLOT_POINTS, MAX_REFINE, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
                       _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary)
 
+FORCE_OPTION = typer.Option(False, "--force", help="let outputs replace existing files that jaxrock did not write "
+                            "(without it such a file is refused; symbolic links always are)")
 UNDAMPED_HELP = "no energy loss: " + ", ".join(f"{k} = {v:g}" for k, v in UNDAMPED.items()) + " (whichever the model takes)"
 
 app = typer.Typer(
@@ -60,11 +62,11 @@ def spectrum(
         None, help="spring models: run generalized-α at this local tolerance in (0, 0.1), its global error checked by a run at 10x "
         "the tolerance (status inaccurate beyond 1e-2 in θ/α; see README); default: the model's default integrator"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),
 ):
     """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
-    from ..io.files import output_stem
-    from .._validate import check_writable
+    from ..io.files import check_output, output_stem
 
     wr = _axis("omega", omega_min, omega_max, n_omega)
     ar = _axis("accel", accel_min, accel_max, n_accel)
@@ -73,7 +75,7 @@ def spectrum(
     integ = _integrator(model, tol)
     out = output_stem(out, "spectrum")
     for suffix in (".nc", ".png"):
-        check_writable("--out", Path(f"{out}{suffix}"))
+        check_output("--out", Path(f"{out}{suffix}"))
     _hold(out, "--out")
     kind = "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value
     _estimate(wr.size * ar.size, kind, yes)
@@ -142,6 +144,7 @@ def simulate(
                                        "picks that format)"),
     t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
     n_points: Optional[int] = typer.Option(None, help=f"plot: number of saved time points, 2 to {MAX_PLOT_POINTS:,} (default 1500)"),
+    force: bool = FORCE_OPTION,
 ):
     """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta,
@@ -210,7 +213,7 @@ def batch(
     results: str = typer.Argument(..., help="results CSV to write (a folder, or a path ending in /: <folder>/<scenes stem>_results.csv)"),
     resume: bool = typer.Option(False, "--resume", help="skip rows already in the results file"),
     chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
-    force: bool = typer.Option(False, "--force", help="overwrite an existing file that is not the results of a batch run"),
+    force: bool = FORCE_OPTION,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
     from .._validate import check_writable
@@ -260,11 +263,12 @@ def record_spectrum(
     out: str = typer.Option("out/record_spectrum", help="output stem: <out>.nc, <out>.csv, <out>.png; a folder (or a path "
                             "ending in /) means <out>/record_spectrum.*"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h"),
 ):
     """Least scale factor of a record that overturns the body, per height (paper figure 10)."""
-    from .._validate import JaxrockInputError, check_writable
-    from ..io.files import output_stem
+    from .._validate import JaxrockInputError
+    from ..io.files import check_output, output_stem
 
     hs = parse_values("--heights", heights)
     sc = parse_values("--scales", scales)
@@ -273,7 +277,7 @@ def record_spectrum(
     exc, desc = _excitation(m.block, DEFAULT_PULSE, record, 1.0, None, None, None, None, units)
     out = output_stem(out, "record_spectrum")
     for suffix in (".nc", ".csv", ".png"):
-        check_writable("--out", Path(f"{out}{suffix}"))
+        check_output("--out", Path(f"{out}{suffix}"))
     _hold(out, "--out")
     per_run = record_run_seconds(model.value, float(exc.t_end - exc.t_start))
     _estimate(hs.size * (sc.size + refine), model.value, yes, what="record runs", per_cell=per_run)
@@ -468,6 +472,7 @@ def suite(
     out: Path = typer.Option(Path("out/suite"), help="output folder: suite.zarr, least_scale.csv/.png, fragility.csv/.md/.png, "
                              "and each model's sweep store <model>.zarr (a rerun resumes it)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a suite estimated beyond 1 h"),
 ):
     """A record suite: each record's intensity measures, its least overturning scale factor for each
@@ -558,6 +563,7 @@ def calibrate(
     tan_alphas: Optional[str] = typer.Option(None, help="slenderness values to calibrate at ('0.1,0.2,0.3' or 'a:b:n'; default 0.05:0.35:13)"),
     max_iter: int = typer.Option(300, help="optimiser iterations at most"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    force: bool = FORCE_OPTION,
 ):
     """Calibrate the spring model's damper c̄ against the rigid model's η⁴ (paper eq. 17, figure 7)."""
     # Thin wrapper over jaxrock.reports.calibration_report.
@@ -616,6 +622,7 @@ def reproduce(
                              "figure and its data; findings/ keeps each finished step (a rerun resumes)"),
     only: Optional[str] = typer.Option(None, help="comma-separated steps to run (default all): " + ", ".join(_steps())),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    force: bool = FORCE_OPTION,
 ):
     """Reproduce the paper: every figure (3-17) into one folder and a report that sets each value the
     paper reports beside jaxrock's, with the difference and a verdict (reproduced / differs,
@@ -644,6 +651,7 @@ def stability(
     out: Path = typer.Option(Path("out/stability"), help="output folder: stability.md, stability.csv, stability.png; "
                              "stability_cases/ keeps each finished case (a rerun resumes)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    force: bool = FORCE_OPTION,
 ):
     """The defaults of the three models (rigid, quasi-rigid SM, flexible SM) on stiff and extreme
     scenes, each against a refined reference: finite or not, status, error, stated accuracy, run
@@ -670,6 +678,7 @@ def work_precision(
     out: Path = typer.Option(Path("out/work-precision"), help="output folder: work_precision.png (the diagrams), .md (tables, the "
                              "defaults against the peers), .csv (every point); work_precision_panels/ keeps each finished panel"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    force: bool = FORCE_OPTION,
 ):
     """Error against run time for the RM (diffrax solvers over rtol, float32, the SciPy event loop)
     and the SM (Tsit5 and generalized-α over the tolerance, Checked, the spring's smoothing and

@@ -172,7 +172,10 @@ def _guarded(fn):
         from .._validate import MADE_FOLDERS, JaxrockInputError, remove_made_folders
         from ..interrupt import deferred_signals
 
+        from ..io import files
+
         MADE_FOLDERS.clear()
+        files.FORCE = bool(kwargs.get("force", False))  # the commands that write files take --force
         try:
             with deferred_signals(), contextlib.ExitStack() as _held:
                 return fn(*args, **kwargs)
@@ -189,5 +192,7 @@ def _guarded(fn):
         except KeyboardInterrupt:
             typer.echo("interrupted: nothing kept", err=True)
             raise typer.Exit(EXIT_INTERRUPTED) from None
+        finally:
+            files.FORCE = False  # the library, called after, keeps its default
 
     return wrapper

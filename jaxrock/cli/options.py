@@ -39,7 +39,8 @@ def figure_path(flag: str, text: str) -> Path:
 
     from matplotlib.backend_bases import FigureCanvasBase
 
-    from .._validate import JaxrockInputError, check_writable
+    from .._validate import JaxrockInputError
+    from ..io.files import check_output
 
     if not text or text.endswith((os.sep, "/")) or Path(text).is_dir():
         raise JaxrockInputError(f"{flag} {text!r}: names a folder; expected a figure file, e.g. {flag} theta.png")
@@ -51,7 +52,7 @@ def figure_path(flag: str, text: str) -> Path:
         path = path.with_name(path.name + ".png")
     elif path.suffix[1:].lower() not in formats:
         raise JaxrockInputError(f"{flag} {path}: matplotlib cannot write {path.suffix!r} files; valid: {', '.join(sorted(formats))}")
-    check_writable(flag, path)
+    check_output(flag, path)
     return path
 
 

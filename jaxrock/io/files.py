@@ -46,6 +46,62 @@ def write_atomically(path: str | os.PathLike, write: Callable[[Path], None]) -> 
     return path
 
 
+FORCE = False  # `--force`: an output may replace a file jaxrock did not write (set by the command line)
+MARK = b"jaxrock"  # every netCDF and figure jaxrock writes holds the word in its first bytes (attributes, metadata)
+
+
+def refuse_foreign(path: str | os.PathLike, head: bytes | None = None) -> None:
+    """Refuse, in one line, to replace `path` when it is a symbolic link, not a regular file, or a
+    file jaxrock did not write (unless `FORCE`). A file jaxrock wrote is recognised by its content:
+    it starts with `head` (the first bytes the new file will have: a CSV's header, a report's
+    title), or its first 64 KiB hold `MARK`."""
+    from .._validate import JaxrockInputError
+
+    p = Path(path)
+    if p.is_symlink():
+        raise JaxrockInputError(f"{p}: is a symbolic link (to {os.path.realpath(p)}); jaxrock does not write through links "
+                                "into files it did not make: name the file itself, or another path")
+    if not p.exists():
+        return
+    if not p.is_file():
+        raise JaxrockInputError(f"{p}: is not a regular file (a folder, a device, a FIFO); expected a file path")
+    if FORCE:
+        return
+    with open(p, "rb") as fh:
+        first = fh.read(65536)
+    if (head and first.startswith(head)) or MARK in first:
+        return
+    raise JaxrockInputError(f"{p}: exists and was not written by jaxrock; pass --force to overwrite it, or choose another path")
+
+
+MARKED = (".nc", ".png", ".pdf", ".svg", ".ps", ".eps")  # the formats whose first bytes name jaxrock (`MARK`)
+
+
+def check_output(name: str, path: str | os.PathLike) -> None:
+    """Before a run: `path` can be written (`jaxrock._validate.check_writable`) and, in a format
+    that names jaxrock in its first bytes, does not replace a file jaxrock did not write (CSV and
+    Markdown outputs are checked as they are written, against the header they will have)."""
+    from .._validate import JaxrockInputError, check_writable
+
+    check_writable(name, path)
+    if Path(path).suffix.lower() in MARKED:
+        try:
+            refuse_foreign(path)
+        except JaxrockInputError as e:
+            raise JaxrockInputError(f"{name} {e}") from None
+
+
+def write_output(path: str | os.PathLike, write: Callable[[Path], None], head: bytes | None = None) -> Path:
+    """An output the user asked for: `refuse_foreign`, then `write_atomically`."""
+    refuse_foreign(path, head)
+    return write_atomically(path, write)
+
+
+def text_head(text: str) -> bytes:
+    """What identifies a text output of jaxrock's: the first 64 bytes of its first line."""
+    return text.split("\n", 1)[0].encode("utf-8")[:64]
+
+
 def _umask() -> int:
     mask = os.umask(0o022)
     os.umask(mask)

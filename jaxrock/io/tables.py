@@ -10,7 +10,7 @@ import math
 from pathlib import Path
 
 from .._validate import JaxrockInputError
-from .files import write_atomically
+from .files import text_head, write_output
 
 
 def cell(x) -> str:
@@ -23,6 +23,8 @@ def cell(x) -> str:
 def write_table(path, rows: list[dict], *, footer: str | None = None) -> Path:
     """Write `rows` (dicts with the same keys, in order) to the CSV file `path`, atomically."""
 
+    header = ",".join(list(rows[0]))
+
     def write(tmp):
         with open(tmp, "w", newline="", encoding="utf-8") as fh:
             w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
@@ -31,7 +33,7 @@ def write_table(path, rows: list[dict], *, footer: str | None = None) -> Path:
             if footer is not None:
                 fh.write(f"# {footer}\n")
 
-    return write_atomically(Path(path), write)
+    return write_output(Path(path), write, text_head(header))
 
 
 def csv_text(path: Path, what: str) -> io.StringIO:

@@ -8,10 +8,11 @@ from pathlib import Path
 
 
 def write_text(path: Path, text: str) -> None:
-    """`text` into `path`, whole or not at all (`jaxrock.io.files.write_atomically`)."""
-    from ..io.files import write_atomically
+    """`text` into `path`, whole or not at all, never over a file jaxrock did not write
+    (`jaxrock.io.files.write_output`)."""
+    from ..io.files import text_head, write_output
 
-    write_atomically(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+    write_output(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"), text_head(text))
 
 
 def write_csv(path: Path, columns: tuple[str, ...], rows: list[dict]) -> None:
@@ -54,6 +55,7 @@ def run_parts(parts, run, folder: Path, key: dict, *, name, desc: str, progress:
     from tqdm.auto import tqdm
 
     from ..interrupt import stop_point
+    from ..io.files import write_atomically  # a part's rows: kept in the run's own folder, read back only by it
 
     folder.mkdir(parents=True, exist_ok=True)
     rows = []
@@ -64,7 +66,7 @@ def run_parts(parts, run, folder: Path, key: dict, *, name, desc: str, progress:
             rows.extend(kept)
             continue
         new = run(part)
-        write_text(path, json.dumps({"key": key, "rows": new}))
+        write_atomically(path, lambda tmp: Path(tmp).write_text(json.dumps({"key": key, "rows": new}), encoding="utf-8"))
         rows.extend(new)
         stop_point()
     return rows

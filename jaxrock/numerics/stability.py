@@ -247,6 +247,8 @@ def _heat_map(path: Path, rows: list[dict]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from ..plotting import save_figure
+
     cases = list(dict.fromkeys(r["case"] for r in rows))
     grid = np.full((len(cases), len(MODELS)), np.nan)
     text = [["" for _ in MODELS] for _ in cases]
@@ -265,5 +267,5 @@ def _heat_map(path: Path, rows: list[dict]) -> None:
     fig.colorbar(im, ax=ax, label="log10(error / stated accuracy)")
     ax.set_title("Defaults on stiff and extreme scenes")
     fig.tight_layout()
-    fig.savefig(path, dpi=150, bbox_inches="tight")
+    save_figure(fig, path)
     plt.close(fig)

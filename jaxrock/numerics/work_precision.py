@@ -426,6 +426,8 @@ def _figure(path: Path, rows: list[dict]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from ..plotting import save_figure
+
     panels = [p for p in PANELS if any(r["panel"] == p.name for r in rows)]
     ncols = 2
     nrows = math.ceil(len(panels) / ncols)
@@ -449,5 +451,5 @@ def _figure(path: Path, rows: list[dict]) -> None:
         ax.set_visible(False)
     fig.suptitle("Work–precision (★ the default)")
     fig.tight_layout()
-    fig.savefig(path, dpi=130, bbox_inches="tight")
+    save_figure(fig, path, dpi=130)
     plt.close(fig)

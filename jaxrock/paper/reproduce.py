@@ -169,8 +169,10 @@ def write_report(report: Report, out: Path) -> dict[str, Path]:
                 lines += ["", extra.read_text(encoding="utf-8").replace("# ", "### ", 1).strip()]
             for png in sorted(out.glob(f"{prefix}*.png")):
                 lines += ["", f"![{png.stem}]({png.name})"]
+    from ..numerics.kept import write_text
+
     md = out / "report.md"
-    md.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text(md, "\n".join(lines) + "\n")
     return {"report": md, "findings": csv}
 
 
