@@ -214,7 +214,7 @@ def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, mon
     assert r.exit_code == 2 and f"jaxrock: {version} → 9.9.9" in r.output, r.output
     (tmp_path / "results.csv.made_by.json").unlink()
     r = invoke("batch", scenes, res, "--resume", "--quiet")
-    assert r.exit_code == 2 and "no readable description results.csv.made_by.json" in r.output, r.output
+    assert r.exit_code == 2 and "is not the results of a batch run (no results.csv.made_by.json beside it)" in r.output, r.output
 
 
 # -- files the user names -----------------------------------------------------------------------
