@@ -150,6 +150,22 @@ def remove_made_folders() -> None:
             pass
 
 
+def check_file_kind(name: str, path) -> None:
+    """An output path names a regular file or nothing yet: a symbolic link (jaxrock does not
+    write through links into files it did not make), a folder, a device or a FIFO is refused."""
+    from pathlib import Path
+
+    path = Path(path)
+    where = f"{name} {path}" if name else f"{path}"
+    if path.is_symlink():
+        raise JaxrockInputError(f"{where}: is a symbolic link (to {os.path.realpath(path)}); jaxrock does not write "
+                                f"through links into files it did not make: name the file itself, or another path")
+    if path.is_dir():
+        raise JaxrockInputError(f"{where}: is a folder; expected a file path")
+    if path.exists() and not path.is_file():
+        raise JaxrockInputError(f"{where}: is not a regular file (a device, a FIFO or a socket); expected a file path")
+
+
 def check_writable(name: str, path) -> None:
     """`path` can be written (its folder is created): probed by writing, not by permission bits,
     so that a run fails here, before its work, not after it."""
@@ -157,13 +173,7 @@ def check_writable(name: str, path) -> None:
     from pathlib import Path
 
     path = Path(path)
-    if path.is_symlink():
-        raise JaxrockInputError(f"{name} {path}: is a symbolic link (to {os.path.realpath(path)}); jaxrock does not write "
-                                f"through links into files it did not make: name the file itself, or another path")
-    if path.is_dir():
-        raise JaxrockInputError(f"{name} {path}: is a folder; expected a file path")
-    if path.exists() and not path.is_file():
-        raise JaxrockInputError(f"{name} {path}: is not a regular file (a device, a FIFO or a socket); expected a file path")
+    check_file_kind(name, path)
     try:
         missing = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -43,7 +43,7 @@ class CalibrationReport:
                 f"{r['cbar_eq17']:9.4f} {r['cbar_calibrated'] / r['cbar_eq17']:6.3f} {r['residual_rms']:9.2e} {r['iterations']:5d}"
             )
         rows.append(f"fit over tanα ∈ [{self.table[0]['tan_alpha']:g}, {self.table[-1]['tan_alpha']:g}]: {self.fit}  (paper: k = 0.02, n = 2)")
-        rows.append(f"fit over tanα ∈ [0.1, 0.3]: "
+        rows.append("fit over tanα ∈ [0.1, 0.3]: "
                     + (f"{self.fit_paper_range}" if self.fit_paper_range is not None else "none (fewer than 3 of the tanα are in it)"))
         return "\n".join(rows)
 

@@ -127,6 +127,7 @@ def builtin_record_names() -> str:
 # (issue 52's campaign); beyond, derived quantities (h², the inertia) overflow to NaN
 HEIGHT_RANGE = (1e-12, 1e12)
 TAN_ALPHA_MIN = 1e-3
+MAX_REFINE = 40  # bisections of a boundary or a least scale: the step / 2^40 is below what a verdict resolves
 
 
 def check_slenderness(height, tan_alpha, tan_alpha_base=None) -> None:

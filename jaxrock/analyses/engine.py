@@ -67,7 +67,6 @@ def _bucket(n: int, batch: int, smallest: int) -> int:
     return size
 
 
-@eqx.filter_jit
 def _check_batch_sizes(model, exc, batched) -> None:
     """Every array leaf of `exc` (and of `model`, when batched) has one leading batch size."""
     sizes = {}
@@ -83,6 +82,7 @@ def _check_batch_sizes(model, exc, batched) -> None:
                                 + "); every scene needs its model and its excitation")
 
 
+@eqx.filter_jit
 def _guard(model, exc, batched):
     """Per scene: its values where within their limits, else the quiet scene's, and whether they
     were (as `simulate`: a batch built under vmap cannot be refused at construction). A model

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import JaxrockInputError, check_grid
+from ..scene import MAX_REFINE
 from .sweep import Sweep, run_sweep, run_values
 
 
@@ -47,8 +48,8 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
 
     if not sweep.records or "scale" not in sweep.axes:
         raise JaxrockInputError("least_overturning_scale needs a record sweep with a scale axis: Sweep.make(..., records=[...], scale=[...])")
-    if not 0 <= int(refine) <= 40:
-        raise JaxrockInputError(f"refine = {refine}; valid: an integer in [0, 40] (each bisection halves the bracket)")
+    if not 0 <= int(refine) <= MAX_REFINE:
+        raise JaxrockInputError(f"refine = {refine}; valid: an integer in [0, {MAX_REFINE}] (each bisection halves the bracket)")
     check_grid("scale (record factors)", sweep.axes["scale"])  # the least factor is the first of them that overturns
     assert sweep.dims[0] == "record" and sweep.dims[-1] == "scale"  # AXIS_ORDER: records outermost, scale innermost
     ds = run_sweep(sweep, store, progress=progress, devices=devices, history=history).drop_vars("chunk_done")

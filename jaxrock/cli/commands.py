@@ -17,9 +17,9 @@ from . import guards
 from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untrusted, _guarded,
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
-from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MODEL_PARAMETERS, PULSES, RECORD_ALIASES,
-                     TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, parameter_help)
-from .options import (MAX_PLOT_POINTS, MAX_REFINE, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
+from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_REFINE, MODEL_PARAMETERS, PULSES,
+                     RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, parameter_help)
+from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
                       _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary)
 
 FORCE_OPTION = typer.Option(False, "--force", help="let outputs replace existing files that jaxrock did not write "

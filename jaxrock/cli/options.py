@@ -39,14 +39,13 @@ def figure_path(flag: str, text: str) -> Path:
 
     from matplotlib.backend_bases import FigureCanvasBase
 
-    from .._validate import JaxrockInputError
+    from .._validate import JaxrockInputError, check_file_kind
     from ..io.files import check_output
 
     if not text or text.endswith((os.sep, "/")) or Path(text).is_dir():
         raise JaxrockInputError(f"{flag} {text!r}: names a folder; expected a figure file, e.g. {flag} theta.png")
     path = Path(text)
-    if path.exists() and not path.is_file():
-        raise JaxrockInputError(f"{flag} {path}: is not a regular file (a device, a FIFO or a socket); expected a figure file")
+    check_file_kind(flag, path)  # before a suffix is added: /dev/full is not /dev/full.png
     formats = FigureCanvasBase.get_supported_filetypes()
     if not path.suffix:
         path = path.with_name(path.name + ".png")
@@ -57,11 +56,11 @@ def figure_path(flag: str, text: str) -> Path:
 
 
 MAX_PLOT_POINTS = 1_000_000  # simulate --plot: saved time points
-MAX_REFINE = 40  # bisections: the step / 2^40 is below what a verdict can resolve (spectrum's --refine has the same bound)
 
 
 def _check_refine(refine: int):
     from .._validate import JaxrockInputError
+    from ..scene import MAX_REFINE
 
     if not 0 <= refine <= MAX_REFINE:
         raise JaxrockInputError(f"--refine = {refine}; valid: an integer in [0, {MAX_REFINE}] (each bisection halves the bracket)")

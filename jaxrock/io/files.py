@@ -55,17 +55,11 @@ def refuse_foreign(path: str | os.PathLike, head: bytes | None = None) -> None:
     file jaxrock did not write (unless `FORCE`). A file jaxrock wrote is recognised by its content:
     it starts with `head` (the first bytes the new file will have: a CSV's header, a report's
     title), or its first 64 KiB hold `MARK`."""
-    from .._validate import JaxrockInputError
+    from .._validate import JaxrockInputError, check_file_kind
 
     p = Path(path)
-    if p.is_symlink():
-        raise JaxrockInputError(f"{p}: is a symbolic link (to {os.path.realpath(p)}); jaxrock does not write through links "
-                                "into files it did not make: name the file itself, or another path")
-    if not p.exists():
-        return
-    if not p.is_file():
-        raise JaxrockInputError(f"{p}: is not a regular file (a folder, a device, a FIFO); expected a file path")
-    if FORCE:
+    check_file_kind("", p)
+    if not p.exists() or FORCE:
         return
     with open(p, "rb") as fh:
         first = fh.read(65536)
@@ -83,7 +77,7 @@ def check_output(name: str, path: str | os.PathLike) -> None:
     Markdown outputs are checked as they are written, against the header they will have)."""
     from .._validate import JaxrockInputError, check_writable
 
-    check_writable(name, path)
+    check_writable(name, path)  # the file's kind, too
     if Path(path).suffix.lower() in MARKED:
         try:
             refuse_foreign(path)

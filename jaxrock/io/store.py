@@ -27,7 +27,6 @@ import os
 import shutil
 import warnings
 from pathlib import Path
-
 from typing import NamedTuple
 
 import numpy as np
@@ -92,12 +91,11 @@ def _make(tmp: Path, sweep, history: str | None) -> None:
     """The empty store of `sweep`, at `tmp`."""
     import xarray as xr
     import zarr
+    from zarr.codecs import Crc32cCodec, ZstdCodec
 
     attrs = {**sweep.attrs(), **({"history": history} if history else {})}
     xr.Dataset(coords=_coordinates(sweep), attrs=attrs).to_zarr(tmp, mode="w", zarr_format=3, consolidated=False)
     group = zarr.open_group(tmp, mode="r+")
-    from zarr.codecs import Crc32cCodec, ZstdCodec
-
     for name, (dtype, fill, var_attrs) in _variables().items():
         a = group.create_array(name, shape=sweep.shape, chunks=sweep.chunk_shape, dtype=dtype, fill_value=fill,
                                dimension_names=sweep.dims, compressors=(ZstdCodec(), Crc32cCodec()))
