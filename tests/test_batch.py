@@ -224,8 +224,8 @@ def test_defaults_are_resolved_at_construction_so_any_rows_stack(kind):
 
 def test_a_scene_is_the_same_in_any_batch_to_the_stated_bound():
     """`run_batch`'s docstring: the same batch gives the same bits; a scene in another batch (other
-    sizes, other neighbours) or alone through `simulate` differs only in its last bits (measured
-    ≤ 2.4e-12; issue 52 found batch rows moving with --chunk-size and never said why). Held here to
+    sizes, other neighbours) or alone through `simulate` differs only in its last bits (issue 52
+    saw 2.4e-12 at most, batch rows moving with --chunk-size, and no word of why). Held here to
     1e-10 over 16 seeded scenes in batches of 16, 5 and 1 and through `simulate`."""
     rng = np.random.default_rng(52)
     n = 16
