@@ -18,7 +18,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jaxtyping import Array, Float, Int
 
 from ._validate import JaxrockInputError, Limit, check_limits, check_range, is_concrete
 
@@ -239,6 +239,9 @@ class StillGround(AbstractExcitation):
 class Record(AbstractExcitation):
     """A sampled ground-motion record: uniform step `dt` [s], accelerations `acc` [m/s²] from t = 0,
     linear between samples and zero outside, multiplied by `scale` (an array leaf: vmap over it).
+    `length`: the number of samples that are the record (an array leaf, default all of `acc`): a
+    record `padded` with zeros to a suite's longest keeps its own end, so that records of distinct
+    lengths share one array shape, hence one compiled program.
 
     Read files with `jaxrock.read_record` (PEER `.AT2` or two-column text) or `jaxrock.el_centro()`.
     """
@@ -246,9 +249,10 @@ class Record(AbstractExcitation):
     acc: Float[Array, " n"]
     dt: Float[Array, ""]
     scale: Float[Array, ""]
+    length: Int[Array, ""]
     name: str = eqx.field(static=True, default="record")
 
-    def __init__(self, acc, dt, scale=1.0, name: str = "record"):
+    def __init__(self, acc, dt, scale=1.0, name: str = "record", length=None):
         if is_concrete(acc):
             a = np.asarray(acc, dtype=float)
             if a.ndim != 1 or a.size < 2:
@@ -259,7 +263,10 @@ class Record(AbstractExcitation):
         self.acc = jnp.asarray(acc, dtype=float)
         self.dt = jnp.asarray(dt, dtype=float)
         self.scale = jnp.asarray(scale, dtype=float)
+        self.length = jnp.asarray(self.acc.shape[-1] if length is None else length, dtype=jnp.int32)
         self.name = name
+        if is_concrete(self.length) and not 2 <= int(self.length) <= self.acc.shape[-1]:
+            raise JaxrockInputError(f"record length = {int(self.length)} is outside [2, {self.acc.shape[-1]}] (the samples given)")
         check_limits(self.limits()[1:])  # the samples were checked above, naming the first bad one
 
     def limits(self) -> tuple[Limit, ...]:
@@ -274,6 +281,14 @@ class Record(AbstractExcitation):
     @property
     def times(self):
         return self.dt * jnp.arange(self.n)
+
+    def padded(self, n: int, name: str | None = None) -> "Record":
+        """The same record with zeros appended up to `n` samples: the same motion, the same end.
+        `name` (static, so part of what a compiled program is keyed by): the padded record's, the
+        same by default; records of a suite padded to one length and one name share a program."""
+        if n < self.n:
+            raise JaxrockInputError(f"record {self.name!r} has {self.n} samples; cannot pad it to {n}")
+        return Record(np.pad(np.asarray(self.acc), (0, n - self.n)), self.dt, self.scale, self.name if name is None else name, self.length)
 
     def scaled(self, factor) -> "Record":
         """The same record multiplied by `factor` (composes with the current scale)."""
@@ -294,7 +309,7 @@ class Record(AbstractExcitation):
 
     @property
     def t_end(self):
-        return self.dt * (self.n - 1)
+        return self.dt * (self.length - 1)
 
     @property
     def max_step(self):
@@ -302,7 +317,19 @@ class Record(AbstractExcitation):
 
     @property
     def step_ts(self):
-        return self.times
+        # a padded record's samples after its end are its end (no steps placed on them)
+        return jnp.where(jnp.arange(self.n) < self.length, self.times, self.t_end)
+
+    def crossing(self, t, k, level):
+        """The first time in [t, t_{k+1}] at which |üg| exceeds `level` on the linear piece of sample
+        interval k ∋ t (+inf if none): |üg| is largest at an end of the piece."""
+        t1 = self.dt * (k + 1)
+        a0, a1 = self(t), self(t1)
+        s = jnp.where(a1 >= 0, 1.0, -1.0)
+        rise = s * a1 - s * a0
+        frac = jnp.clip((level - s * a0) / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
+        tau = jnp.where(rise > 0, t + frac * (t1 - t), t1)
+        return jnp.where(jnp.abs(a0) > level, t, jnp.where(jnp.abs(a1) > level, tau, jnp.inf))
 
     def next_exceedance(self, t, level):
         t = jnp.asarray(t, dtype=float)

@@ -33,13 +33,16 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import diffrax
 import equinox as eqx
+import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
+import optimistix as optx
 from jaxtyping import Array
 
 from .._rootfind import SafeNewton
 from ..bookkeeping import Record
 from ..excitation import AbstractExcitation
+from ..excitation import Record as SampledRecord
 from ..geometry import G
 from ..model import AbstractIntegrator, AbstractStepper, FirstStepController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
@@ -110,6 +113,26 @@ class _Carry(eqx.Module):
     hist: dict | None
 
 
+class _Paced(eqx.Module):
+    """The state of a summary run on a sampled record, advanced one step attempt at a time
+    (`RigidStepper._attempt`); the fields `_solution` reads are `_Carry`'s."""
+
+    t: Array
+    theta: Array
+    theta_dot: Array
+    side: Array
+    mode: Array
+    rec: Record
+    n_impacts: Array
+    n_segments: Array
+    k: Array  # the sample interval [t_k, t_k+1) that holds t; the record's last sample index after its end
+    h: Array  # the next step the error control proposes
+    cap: Array  # the largest step of the current flight (`_flight_steps`)
+    status: Status
+    finished: Array
+    hist: None = None
+
+
 class _Scene(NamedTuple):
     """The per-scene constants of a run (cheap scalars, recomputed where needed)."""
 
@@ -170,7 +193,23 @@ class RigidStepper(AbstractStepper):
             tiny=jnp.finfo(dtype).tiny,
         )
 
-    def init(self, exc: AbstractExcitation) -> _Carry:
+    def _paced(self, exc: AbstractExcitation) -> bool:
+        """Whether a run goes sample by sample (module docstring): summaries on a sampled record."""
+        return self.summary_only and isinstance(exc, SampledRecord)
+
+    def init(self, exc: AbstractExcitation) -> _Carry | _Paced:
+        c = self._init(exc)
+        if not self._paced(exc):
+            return c
+        # the quiet start of the record in one search (a block that never uplifts is done here)
+        sc = self._scene(exc)
+        c = self._rest_step(sc, exc, c)
+        h, cap = self._flight_steps(sc, exc, c.t, c.theta, c.theta_dot, c.side)
+        return _Paced(t=c.t, theta=c.theta, theta_dot=c.theta_dot, side=c.side, mode=c.mode, rec=c.rec,
+                      n_impacts=c.n_impacts, n_segments=c.n_segments, k=_interval(exc, c.t), h=h, cap=cap,
+                      status=c.status, finished=c.finished)
+
+    def _init(self, exc: AbstractExcitation) -> _Carry:
         dtype = jnp.result_type(float)
         zero = jnp.zeros((), dtype)
         save = self.save
@@ -197,10 +236,12 @@ class RigidStepper(AbstractStepper):
         status = Status.where(~c.finished & (c.status == Status.ok), Status.max_iterations, c.status)
         return _solution(self.model, c, status, self.summary_only, self.save)
 
-    def step(self, exc: AbstractExcitation, c: _Carry) -> _Carry:
+    def step(self, exc: AbstractExcitation, c: _Carry | _Paced) -> _Carry | _Paced:
         sc = self._scene(exc)
         is_rest = c.mode == _REST
         c = eqx.tree_at(lambda x: x.n_segments, c, c.n_segments + 1)
+        if isinstance(c, _Paced):
+            return jax.lax.fori_loop(0, self.integrator.chunk_steps, lambda _, c: self._attempt(sc, exc, c), c)
         c_rest = self._rest_step(sc, exc, c)
         # a block that uplifts in this iteration rocks in the same iteration
         c = jax.tree_util.tree_map(lambda a, b: jnp.where(is_rest, a, b), c_rest, c)
@@ -249,26 +290,11 @@ class RigidStepper(AbstractStepper):
         model, integ, save, summary_only = self.model, self.integrator, self.save, self.summary_only
         alpha, p, eta, threshold, t_end, h_nom, tiny = sc.alpha, sc.p, sc.eta, sc.threshold, sc.t_end, sc.h_nom, sc.tiny
         t_seg = jnp.where(is_rocking, self._segment_end(sc, c), c.t)
-        acc0 = model.acceleration(c.t, c.theta, c.side, exc)
-        at_zero = c.theta == 0
         dt_min = self._min_step(sc, c.t)
-        # The flight's time scale: from θ = 0 its duration 2|θ̇|/|θ̈|, from an apex its fall √(2|θ|/|θ̈|).
-        # A fresh segment's first step off θ = 0 is a fortieth of it (`dt_flight`), and its steps stay
-        # below a quarter of it, so that no step holds a crossing of θ = 0 and the return from it (the
-        # impact event sees sθ of one sign at both ends: a 42 ms step over an 8 ms dip after a tiny
-        # apex lost two impacts).
-        acc_abs = jnp.maximum(jnp.abs(acc0), tiny)
-        t_flight = jnp.where(at_zero, 2 * jnp.abs(c.theta_dot) / acc_abs, jnp.sqrt(2 * jnp.abs(c.theta) / acc_abs))
-        dt_flight = 0.05 * jnp.abs(c.theta_dot) / acc_abs
-        fresh_segment = (c.dt_next == 0) & ((c.theta != 0) | (c.theta_dot != 0))
-        dtmax = jax.lax.stop_gradient(jnp.where(fresh_segment, jnp.clip(0.25 * t_flight, dt_min, exc.max_step), exc.max_step))
-        term, event, controller = self._diffrax_parts(sc, exc, dtmax)
-        dt0 = jnp.where(at_zero, jnp.clip(dt_flight, dt_min, h_nom), h_nom)
-        dt0 = jnp.where(c.dt_next > 0, c.dt_next, dt0)
+        h0, cap = self._flight_steps(sc, exc, c.t, c.theta, c.theta_dot, c.side)
+        term, event, controller = self._diffrax_parts(sc, exc, jnp.where(c.dt_next == 0, cap, exc.max_step))
         t_win = jnp.minimum(t_seg, c.t + integ.chunk_steps * h_nom)
-        # A step size carries no derivative (as diffrax's own controller): the flight estimate's
-        # |θ̇|/|θ̈| has an infinite derivative where θ̈ underflows (an overturned lane after the
-        # pulse, still evaluated under vmap), and 0·∞ = NaN reached every lane's gradient.
+        dt0 = jnp.where(c.dt_next > 0, c.dt_next, h0)
         dt0 = jax.lax.stop_gradient(jnp.minimum(dt0, jnp.maximum(t_win - c.t, tiny)))
         saveat = diffrax.SaveAt(t1=True, dense=not summary_only)
         sol = diffrax.diffeqsolve(
@@ -322,16 +348,8 @@ class RigidStepper(AbstractStepper):
             hold = {"theta": c.side * threshold * alpha, "theta_dot": theta_dot_f}
             hist = {k: jnp.where(after, hold[k], v) for k, v in hist.items()}
 
-        # impact (eq. 3)
-        theta_dot_impact = eta * theta_dot_f
-        side_imp = -c.side
-        s_ug = side_imp * exc(tf) / G
-        a_s = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) + s_ug)
-        a_o = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) - s_ug)
-        v = jnp.abs(theta_dot_impact)
-        both = (a_s > 0) & (a_o > 0)
-        t_zeno = 2 * v / (1 - eta**2 + tiny) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
-        zeno = hit_impact & both & ((t_zeno * p <= integ.zeno_time) | (v <= integ.zeno_velocity * p * alpha))
+        theta_dot_impact, side_imp, zeno = self._impact(sc, exc, tf, theta_dot_f, c.side)
+        zeno = hit_impact & zeno
 
         rec = c.rec.saw_peak(is_rocking & (hit_apex | (not summary_only)) & ~back_to_rest, thf).saw_overturn(hit_over, tf)
         theta_new = jnp.where(hit_impact | back_to_rest, 0.0, thf)
@@ -366,6 +384,146 @@ class RigidStepper(AbstractStepper):
         )
         return out
 
+    def _attempt(self, sc: _Scene, exc: SampledRecord, c: _Paced) -> _Paced:
+        """One step attempt of a paced run: a block at rest looks for |üg| > g tanα′ on the current
+        sample interval; a rocking block takes one error-controlled step of the solver, to the next
+        sample at most, and locates the first event (overturn, apex, impact: as the diffrax
+        events) on the step's dense output."""
+        model, integ = self.model, self.integrator
+        solver = _stage_loop(integ)
+        alpha, p, eta, tiny = sc.alpha, sc.p, sc.eta, sc.tiny
+        active = ~c.finished
+        in_record = c.k < exc.length - 1
+        # the next sample, or after the record the end of a free motion that overturns
+        t_b = jnp.where(in_record, exc.dt * (c.k + 1).astype(c.t.dtype), c.t + 1e4 / p)
+
+        # at rest: uplift on this interval, else on to its end
+        rest = active & (c.mode == _REST)
+        t_up = exc.crossing(c.t, c.k, sc.level)
+        up = rest & in_record & (t_up <= t_b)
+        t_rest = jnp.where(up, t_up, t_b)
+        side_up = -jnp.sign(exc(t_rest))
+
+        # rocking: one step of at most the flight's cap, ending on the next sample at the latest
+        rock = active & (c.mode == _ROCKING)
+        s, thr = c.side, sc.threshold * alpha
+        # (a step that would leave less than 1 % of itself before the sample goes to the sample: the
+        # interval t_k+1 − t_k rounds an ulp above the step cap dt, and the remnant would be an ulp)
+        h = jnp.minimum(c.h, c.cap)
+        t1 = jnp.where(c.t + 1.01 * h >= t_b, t_b, c.t + h)
+
+        def vf(t, y, side):
+            return y[1], model.acceleration(t, y[0], side, exc)
+
+        term = diffrax.ODETerm(vf)
+        y0 = (c.theta, c.theta_dot)
+        state0 = solver.init(term, c.t, t1, y0, s)
+        y1, y_err, dense, _, _ = solver.step(term, c.t, t1, y0, s, state0, made_jump=False)
+        # error control as diffrax's PIDController (its defaults: an integral controller)
+        scale = [integ.atol + integ.rtol * jnp.maximum(jnp.abs(a), jnp.abs(b)) for a, b in zip(y0, y1)]
+        err = jnp.sqrt(0.5 * sum((e / sc_) ** 2 for e, sc_ in zip(y_err, scale)))
+        finite = jnp.isfinite(y1[0]) & jnp.isfinite(y1[1]) & jnp.isfinite(err)
+        ok = finite & (err <= 1)
+        factor = jnp.where(err == 0, 10.0, 0.9 * jnp.where(finite & (err > 0), err, 1.0) ** (-1.0 / solver.order(term)))
+        h_next = jax.lax.stop_gradient(jnp.where(finite, jnp.clip(factor, 0.2, 10.0), 0.2) * (t1 - c.t))
+
+        # the events, in diffrax's priority (`_diffrax_parts`)
+        g0, g1 = (s * c.theta, s * c.theta_dot), (s * y1[0], s * y1[1])
+        over = (g0[0] - thr <= 0) & (g1[0] - thr > 0)
+        apex = ~over & (g0[1] > 0) & (g1[1] <= 0)
+        impact = ~over & ~apex & (g0[0] > 0) & (g1[0] <= 0)
+        event = rock & ok & (over | apex | impact)
+        interp = solver.interpolation_cls(t0=c.t, t1=t1, **dense)
+
+        def condition(t, _):
+            th, th_dot = interp.evaluate(t)
+            return jnp.where(apex, s * th_dot, s * th - jnp.where(over, thr, 0.0))
+
+        def locate():
+            root = optx.root_find(condition, SafeNewton(rtol=integ.root_tol, atol=integ.root_tol), t1,
+                                  options={"lower": c.t, "upper": t1}, throw=False)
+            return root.value
+
+        te = jnp.where(event, jax.lax.cond(eqxi.unvmap_any(event), locate, lambda: t1), t1)
+        ye = interp.evaluate(te)
+        thf, theta_dot_f = jnp.where(event, ye[0], y1[0]), jnp.where(event, ye[1], y1[1])
+        hit_over, hit_apex, hit_impact = event & over, event & apex, event & impact
+        fresh = (c.theta == 0) & (c.theta_dot == 0)
+        back_to_rest = rock & ok & fresh & ~hit_impact & ~hit_over & (s * y1[0] <= 0)
+        missed = rock & ok & ~hit_impact & ~back_to_rest & (s * thf < -1e-6 * alpha)
+
+        theta_dot_impact, side_imp, zeno = self._impact(sc, exc, te, theta_dot_f, s)
+        zeno = hit_impact & zeno
+        theta_r = jnp.where(hit_impact | back_to_rest, 0.0, thf)
+        theta_dot_r = jnp.where(hit_impact, jnp.where(zeno, 0.0, theta_dot_impact), jnp.where(hit_apex | back_to_rest, 0.0, theta_dot_f))
+        side_r = jnp.where(hit_impact, side_imp, s)
+        mode_r = jnp.where(hit_over, _OVERTURNED, jnp.where(zeno | back_to_rest, _REST, _ROCKING))
+        t_r = jnp.where(back_to_rest, c.t + self._min_step(sc, c.t), te)
+        at_b = ok & ~event & ~back_to_rest & (t1 == t_b)
+        # on reaching the record's end, the run goes on exactly when the free motion overturns
+        end_free = at_b & in_record & (c.k + 2 == exc.length) & (model.free_peak(thf, theta_dot_f, s) < sc.threshold)
+        finished_r = hit_over | missed | end_free | (at_b & ~in_record)
+
+        # merge: rest lanes, rocking lanes, finished lanes unchanged
+        sel = lambda a_rest, a_rock, a: jnp.where(rest, a_rest, jnp.where(rock & ok, a_rock, a))  # a rejected step changes only h
+        t_new = sel(t_rest, t_r, c.t)
+        theta_new = sel(c.theta, theta_r, c.theta)
+        theta_dot_new = sel(c.theta_dot, theta_dot_r, c.theta_dot)
+        side_new = sel(jnp.where(up, side_up, c.side), side_r, c.side)
+        new_flight = (up & rest) | (rock & (hit_apex | hit_impact))
+        h_f, cap_f = self._flight_steps(sc, exc, t_new, theta_new, theta_dot_new, side_new)
+        k_new = jnp.where(in_record & (t_new >= t_b), c.k + 1, c.k)
+        return _Paced(
+            t=t_new,
+            theta=theta_new,
+            theta_dot=theta_dot_new,
+            side=side_new,
+            mode=sel(jnp.where(up, _ROCKING, _REST), mode_r, c.mode),
+            rec=c.rec.saw_uplift(up, t_up).saw_peak(rock & hit_apex, thf).saw_overturn(rock & hit_over, te),
+            n_impacts=c.n_impacts + (rock & hit_impact).astype(c.n_impacts.dtype),
+            n_segments=c.n_segments,
+            k=k_new,
+            h=jnp.where(new_flight, h_f, jnp.where(rock, h_next, c.h)),
+            cap=jnp.where(new_flight, cap_f, c.cap),
+            status=Status.where(rock & missed, Status.missed_impact, c.status),
+            finished=c.finished | (rest & ~in_record) | (rock & finished_r),
+        )
+
+    def _flight_steps(self, sc: _Scene, exc: AbstractExcitation, t, theta, theta_dot, side):
+        """(first step, largest step) of a flight (a segment) from (θ, θ̇) at time t on `side`.
+
+        The flight's time scale: from θ = 0 its duration 2|θ̇|/|θ̈|, from an apex its fall
+        √(2|θ|/|θ̈|). A flight's first step off θ = 0 is a fortieth of it, and its steps stay below
+        a quarter of it, so that no step holds a crossing of θ = 0 and the return from it (the
+        impact event sees sθ of one sign at both ends: a 42 ms step over an 8 ms dip after a tiny
+        apex lost two impacts). A block uplifting from rest (θ = θ̇ = 0) starts at the least step.
+        A step size carries no derivative (as diffrax's own controller): the flight estimate's
+        |θ̇|/|θ̈| has an infinite derivative where θ̈ underflows (an overturned lane after the
+        pulse, still evaluated under vmap), and 0·∞ = NaN reached every lane's gradient."""
+        acc_abs = jnp.maximum(jnp.abs(self.model.acceleration(t, theta, side, exc)), sc.tiny)
+        dt_min = self._min_step(sc, t)
+        at_zero = theta == 0
+        t_flight = jnp.where(at_zero, 2 * jnp.abs(theta_dot) / acc_abs, jnp.sqrt(2 * jnp.abs(theta) / acc_abs))
+        moving = (theta != 0) | (theta_dot != 0)
+        cap = jnp.where(moving, jnp.clip(0.25 * t_flight, dt_min, exc.max_step), exc.max_step)
+        h0 = jnp.where(at_zero, jnp.clip(0.05 * jnp.abs(theta_dot) / acc_abs, dt_min, sc.h_nom), sc.h_nom)
+        return jax.lax.stop_gradient(h0), jax.lax.stop_gradient(cap)
+
+    def _impact(self, sc: _Scene, exc: AbstractExcitation, tf, theta_dot_f, side):
+        """The impact at time `tf` on `side` (eq. 3): (θ̇ after it, the new side, whether the Zeno
+        closure puts the block to rest: module docstring)."""
+        alpha, p, eta, integ = sc.alpha, sc.p, sc.eta, self.integrator
+        theta_dot_impact = eta * theta_dot_f
+        side_imp = -side
+        s_ug = side_imp * exc(tf) / G
+        a_s = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) + s_ug)
+        a_o = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) - s_ug)
+        v = jnp.abs(theta_dot_impact)
+        both = (a_s > 0) & (a_o > 0)
+        t_zeno = 2 * v / (1 - eta**2 + sc.tiny) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
+        zeno = both & ((t_zeno * p <= integ.zeno_time) | (v <= integ.zeno_velocity * p * alpha))
+        return theta_dot_impact, side_imp, zeno
+
     def _diffrax_parts(self, sc: _Scene, exc: AbstractExcitation, dtmax):
         """The rocking equation's term, its three events and the step-size controller (steps of at
         most `dtmax`)."""
@@ -394,6 +552,15 @@ class RigidStepper(AbstractStepper):
         return term, event, controller
 
 
+def _interval(exc: SampledRecord, t):
+    """The sample interval k with t_k ≤ t < t_k+1 (the record's last sample index from its end on)."""
+    t = jnp.where(jnp.isfinite(t), t, 0.0)
+    k = jnp.floor(t / exc.dt).astype(jnp.int32)
+    k = jnp.where(exc.dt * (k + 1).astype(t.dtype) <= t, k + 1, k)
+    k = jnp.where(exc.dt * k.astype(t.dtype) > t, k - 1, k)
+    return jnp.clip(k, 0, exc.length - 1)
+
+
 def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, save: Save | None) -> Solution:
     rec = c.rec
     if summary_only:
@@ -402,3 +569,12 @@ def _solution(model: RigidModel, c: _Carry, status: Status, summary_only: bool, 
         rec = rec.saw_peak(still, model.free_rotation(c.theta, c.theta_dot, c.side))
     return model.watch().solution(rec, status, n_impacts=c.n_impacts, ts=None if summary_only else save.ts,
                                   history=c.hist, n_iterations=c.n_segments)
+
+
+def _stage_loop(integ: EventIntegrator):
+    """The integrator's solver with the loop over its stages that `autodiff` can differentiate:
+    forward mode needs a plain loop (as diffrax's `ForwardMode` sets), reverse mode a checkpointed one."""
+    solver = integ.solver
+    if integ.autodiff == "forward" and hasattr(solver, "scan_kind"):
+        return eqx.tree_at(lambda s: s.scan_kind, solver, "lax", is_leaf=lambda x: x is None)
+    return solver
