@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import jaxrock as jr
+from jaxrock.analyses import kernels
 from jaxrock.analyses.engine import run_batch
 from jaxrock.geometry import G
 from jaxrock.numerics import scipy_rigid as sr
@@ -142,3 +143,36 @@ def test_a_record_that_never_reaches_the_level_ends_at_once():
     assert float(sol.max_theta) == 0.0 and not bool(sol.overturned) and int(sol.n_iterations) == 0
     assert float(m.block.uplift_acceleration) == pytest.approx(G * float(jnp.tan(m.block.alpha_r)))
     assert eqx.is_array(rec.length) and int(rec.length) == rec.n
+
+
+def _programs(fn) -> int:
+    """How many run-loop programs (`kernels.advance`'s, keyed by shapes and structure) `fn()` adds."""
+    before = set(kernels._KERNELS)
+    fn()
+    return len(set(kernels._KERNELS) - before)
+
+
+@pytest.mark.parametrize("via", ["sweep", "scenes file"])
+def test_a_suite_of_distinct_lengths_compiles_what_one_record_does(via, tmp_path):
+    """Records padded to the suite's longest under one name (`Sweep`, scenes files): three records
+    of three lengths (none used elsewhere) compile no more programs than one record alone."""
+    d = 0.0 if via == "sweep" else 0.3  # lengths of their own for each case: no program shared with the other
+    one = [synthetic(21, 9.99 + d, 0.01)]
+    three = [synthetic(22, 10.49 + d, 0.01), synthetic(23, 5.19 + d, 0.005), synthetic(24, 21.07 + d, 0.02)]
+    assert len({r.n for r in three} | {one[0].n}) == 4
+
+    def run(records):
+        if via == "sweep":
+            sweep = jr.Sweep.make("rigid", records=records, height=[1.0, 3.0], tan_alpha=0.2, scale=[0.5, 2.0, 4.0])
+            return lambda: jr.run_sweep(sweep, progress=False)
+        rows = ["model,height,tan_alpha,pulse,scale"]
+        for r in records:
+            path = tmp_path / f"{r.name}.txt"
+            np.savetxt(path, np.column_stack([np.asarray(r.times), np.asarray(r.acc)]))
+            rows += [f"rigid,{h},0.2,{path.name},{s}" for h in (1.0, 3.0) for s in (0.5, 2.0, 4.0)]
+        scenes = tmp_path / f"scenes{len(records)}.csv"
+        scenes.write_text("\n".join(rows) + "\n")
+        return lambda: jr.run_scenes(scenes, tmp_path / f"results{len(records)}.csv", progress=False)
+
+    alone, suite = _programs(run(one)), _programs(run(three))
+    assert 0 < suite <= alone, (alone, suite)

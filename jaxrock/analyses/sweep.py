@@ -318,7 +318,9 @@ class Sweep:
             return jax.vmap(pulse_class(self.pulse))(jnp.asarray(a_p), jnp.asarray(w_p))
         (rec,) = {int(i) for i in v["record"]}  # one record per chunk (`chunk_shape`)
         scale = v.get("scale", np.ones(len(v["record"])))
-        return jax.vmap(self.records[rec].scaled)(jnp.asarray(scale))
+        # every record padded to the sweep's longest, under one name: one compiled program per sweep
+        longest = max(r.n for r in self.records)
+        return jax.vmap(self.records[rec].padded(longest, "record").scaled)(jnp.asarray(scale))
 
 
 def run_chunk(sweep: Sweep, k: int, devices=None) -> dict[str, np.ndarray]:

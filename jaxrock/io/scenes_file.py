@@ -189,7 +189,7 @@ def _stack(objs):
 @dataclass
 class Scenes:
     """Every checked row of a scenes file, as arrays (one entry per row) and groups of rows that
-    run in one vmapped batch (same model kind and excitation kind; records of one length)."""
+    run in one vmapped batch (same model kind and excitation kind; records of any length, padded)."""
 
     header: list[str]
     rows: np.ndarray  # row numbers (from 1)
@@ -229,7 +229,8 @@ class Scenes:
         """The stacked excitations of rows `idx` (all of excitation kind `exc`)."""
         if exc in PULSES:
             return jax.vmap(pulse_class(exc))(jnp.asarray(self.params["a_p"][idx]), jnp.asarray(self.params["omega_p"][idx]))
-        return _stack([self.records[i].scaled(self.params["scale"][i]) for i in idx])
+        n = max(self.records[i].n for i in idx)  # records of distinct lengths, padded to one: one program
+        return _stack([self.records[i].padded(n, "record").scaled(self.params["scale"][i]) for i in idx])
 
 
 def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
@@ -275,7 +276,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     t.fail(flexible & _invalid_lanes(columns), None, lambda i: _refusal(lambda: Column(params["E"][i], params["rho"][i])))
 
     pulse = t.text("pulse", DEFAULT_PULSE).astype(str)
-    exc = np.char.lower(pulse).astype(object)  # room for "record:<n>"
+    exc = np.char.lower(pulse).astype(object)
     is_pulse = np.isin(exc, list(PULSES))
     t.fail(is_pulse & t.has("scale"), "scale", "applies only to records, not to a Ricker pulse")
     records = [None] * t.n
@@ -284,7 +285,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
         rec = _resolve_record(str(name), base, lambda msg: t.fail(pulse == name, "pulse", msg), cache)
         for i in rows:
             records[i] = rec
-        exc[rows] = f"record:{rec.n}"
+        exc[rows] = "record"
     by_a = t.one_of("a_p", "accel_ratio", "pulse amplitude a_p [m/s^2], or a_p/(g tan alpha)", is_pulse)
     by_w = t.one_of("omega_p", "omega_ratio", "pulse frequency omega_p [rad/s], or omega_p/p", is_pulse)
     a_p, a_r = t.num("a_p", nonzero=True, rows=is_pulse), t.num("accel_ratio", nonzero=True, rows=is_pulse)
