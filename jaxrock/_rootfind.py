@@ -74,3 +74,45 @@ class SafeNewton(optx.AbstractRootFinder):
 
     def postprocess(self, fn, y, aux, args, options, state, tags, result):
         return y, aux, {}
+
+
+def bracketed_root(g: Callable, params, lower, upper, tol, max_steps: int = 200):
+    """The root of a scalar `g(t, params)` with a sign change on [lower, upper] (lower = upper:
+    that point), by the same safeguarded Newton as `SafeNewton`, in a plain loop (cheap under
+    `vmap`: a lane without a bracket is done at once, and the loop carries no derivatives); its
+    derivatives by the implicit function theorem, as optimistix gives them: the stopped root t*
+    plus −(g(t*) − g(t*)|stopped)/g′(t*), whose value is 0 and whose derivative is −∂g/g′."""
+    frozen_params = jax.lax.stop_gradient(params)
+    frozen = lambda t: g(t, frozen_params)
+    lower, upper = jax.lax.stop_gradient(lower), jax.lax.stop_gradient(upper)
+    f_lo, f_hi = frozen(lower), frozen(upper)
+    flip = f_lo > f_hi
+    # first guess: where the chord crosses zero
+    chord = jnp.where(f_hi != f_lo, lower - f_lo * (upper - lower) / jnp.where(f_hi != f_lo, f_hi - f_lo, 1.0), upper)
+    t0 = jnp.where((f_lo == 0) | (upper == lower), lower, jnp.where(f_hi == 0, upper, jnp.clip(chord, lower, upper)))
+    done0 = (f_lo == 0) | (f_hi == 0) | (upper == lower)
+
+    def body(s):
+        t, lo, hi, _, k, done = s
+        f, df = jax.jvp(frozen, (t,), (jnp.ones_like(t),))
+        o = jnp.where(flip, -f, f)  # oriented: o < 0 below the root
+        lo, hi = jnp.where(o < 0, t, lo), jnp.where(o < 0, hi, t)
+        newton = t - f / jnp.where(df == 0, 1.0, df)
+        inside = (df != 0) & (newton > lo) & (newton < hi)
+        converged = (df != 0) & (jnp.abs(newton - t) < tol * (1 + jnp.abs(t)))
+        new = jnp.where(inside, newton, jnp.where(converged, jnp.clip(newton, lo, hi), 0.5 * (lo + hi)))
+        new = jnp.where(f == 0, t, new)
+        return new, lo, hi, jnp.abs(new - t), k + 1, done | (f == 0)
+
+    def cond(s):
+        t, lo, hi, step, k, done = s
+        small = (step < tol * (1 + jnp.abs(t))) | (hi - lo < tol * (1 + jnp.abs(t)))
+        return ~done & ~small & (k < max_steps)
+
+    init = (t0, lower, upper, jnp.full_like(t0, jnp.inf), 0, done0)
+    root = jax.lax.stop_gradient(jax.lax.while_loop(cond, body, init)[0])
+    f, df = jax.jvp(lambda t: g(t, params), (root,), (jnp.ones_like(root),))
+    df = jax.lax.stop_gradient(df)
+    # (a point given as its own bracket carries no derivative: the caller's where picks its own)
+    ok = (upper > lower) & (df != 0)
+    return root - jnp.where(ok, (f - jax.lax.stop_gradient(f)) / jnp.where(ok, df, 1.0), 0.0)

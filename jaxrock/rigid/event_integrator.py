@@ -33,13 +33,11 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import diffrax
 import equinox as eqx
-import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 from jaxtyping import Array
 
-from .._rootfind import SafeNewton
+from .._rootfind import SafeNewton, bracketed_root
 from ..bookkeeping import Record
 from ..excitation import AbstractExcitation
 from ..excitation import Record as SampledRecord
@@ -435,16 +433,12 @@ class RigidStepper(AbstractStepper):
         event = rock & ok & (over | apex | impact)
         interp = solver.interpolation_cls(t0=c.t, t1=t1, **dense)
 
-        def condition(t, _):
+        def condition(t, args):
+            interp, s, thr = args
             th, th_dot = interp.evaluate(t)
             return jnp.where(apex, s * th_dot, s * th - jnp.where(over, thr, 0.0))
 
-        def locate():
-            root = optx.root_find(condition, SafeNewton(rtol=integ.root_tol, atol=integ.root_tol), t1,
-                                  options={"lower": c.t, "upper": t1}, throw=False)
-            return root.value
-
-        te = jnp.where(event, jax.lax.cond(eqxi.unvmap_any(event), locate, lambda: t1), t1)
+        te = jnp.where(event, bracketed_root(condition, (interp, s, thr), jnp.where(event, c.t, t1), t1, integ.root_tol), t1)
         ye = interp.evaluate(te)
         thf, theta_dot_f = jnp.where(event, ye[0], y1[0]), jnp.where(event, ye[1], y1[1])
         hit_over, hit_apex, hit_impact = event & over, event & apex, event & impact
