@@ -26,6 +26,8 @@ from .._validate import JaxrockInputError, check_grid
 from ..scene import MAX_REFINE
 from .sweep import Sweep, run_sweep, run_values
 
+BISECTION_CELLS = 256  # the least batch of a bisection round (records grouped to reach it)
+
 
 def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progress: bool = True, devices=None,
                             history: str | None = None):
@@ -63,14 +65,22 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     cell_dims = sweep.dims[1:-1]
     cells = sweep.values_at(tuple(slice(0, len(sweep.axes[d])) for d in cell_dims), cell_dims)  # every column, C order
     kept = _Bisections(store, ds.attrs["made_by"], int(refine), hi, lo, worst)
-    with tqdm(total=len(sweep.records) * int(refine), desc="bisection", unit="batch", disable=not progress) as bar:
-        for r in range(len(sweep.records)):
-            todo = has[r].ravel()
-            if not todo.any() or kept.done[r]:
-                bar.update(int(refine))
-                continue
-            h, l, w = hi[r].ravel().copy(), lo[r].ravel().copy(), worst[r].ravel().copy()
-            v = {name: x[todo] for name, x in cells.items()} | {"record": np.full(int(todo.sum()), r)}
+    n_cells = int(np.prod(has.shape[1:]))
+    # records bisected together, in groups of at least BISECTION_CELLS cells: a batch's lanes move in
+    # lockstep, and a record's few cells alone would leave most of each loop step's work undone
+    groups, group = [], []
+    for r in range(len(sweep.records)):
+        if has[r].any() and not kept.done[r]:
+            group.append(r)
+            if len(group) * n_cells >= BISECTION_CELLS:
+                groups, group = groups + [group], []
+    groups += [group] if group else []
+    with tqdm(total=len(groups) * int(refine), desc="bisection", unit="batch", disable=not progress) as bar:
+        for group in groups:
+            todo = has[group].reshape(len(group), -1)
+            h, l, w = (a[group].reshape(len(group), -1).copy() for a in (hi, lo, worst))
+            v = {name: np.broadcast_to(x.ravel(), todo.shape)[todo] for name, x in cells.items()}
+            v["record"] = np.broadcast_to(np.asarray(group)[:, None], todo.shape)[todo]
             for _ in range(int(refine)):
                 interrupt.stop_point()
                 mid = 0.5 * (l[todo] + h[todo])
@@ -80,8 +90,9 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
                 l[todo] = np.where(yes, l[todo], mid)
                 w[todo] = np.maximum(w[todo], out["status"])
                 bar.update()
-            hi[r], lo[r], worst[r] = h.reshape(hi[r].shape), l.reshape(lo[r].shape), w.reshape(worst[r].shape)
-            kept.finished(r)
+            for i, r in enumerate(group):
+                hi[r], lo[r], worst[r] = h[i].reshape(hi[r].shape), l[i].reshape(lo[r].shape), w[i].reshape(worst[r].shape)
+                kept.finished(r)
     dims = sweep.dims[:-1]
     ds["least_scale"] = (dims, hi, {"long_name": "least scale factor that overturns (inf: none of the sweep)", "units": "1"})
     ds["bracket_low"] = (dims, lo, {"long_name": "largest scale factor below least_scale known not to overturn", "units": "1"})

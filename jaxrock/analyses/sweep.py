@@ -159,15 +159,16 @@ class Sweep:
     @property
     def chunk_shape(self) -> tuple[int, ...]:
         """The chunk: `t` values of one axis and every axis inside it whole, one value of the axes
-        outside (records one at a time), at most `chunk_size` scenes. Of these the one that
-        maximises cells²/2^⌈log₂ cells⌉ (the batch engine pads a batch to a power-of-two multiple
-        of its smallest size: 2016 cells run at 2048, 2304 at 4096)."""
+        outside, at most `chunk_size` scenes (several records of a record sweep too: they are
+        padded to one length, `_excitations`). Of these the one that maximises
+        cells²/2^⌈log₂ cells⌉ (the batch engine pads a batch to a power-of-two multiple of its
+        smallest size: 2016 cells run at 2048, 2304 at 4096)."""
         shape, best, best_score = self.shape, (), -1.0
         for j in range(len(shape)):
             inner = math.prod(shape[j + 1 :])
-            if inner > self.chunk_size or (j < len(shape) - 1 and self.dims[j + 1] == "record"):
+            if inner > self.chunk_size:
                 continue
-            most = 1 if self.dims[j] == "record" else min(shape[j], self.chunk_size // inner)
+            most = min(shape[j], self.chunk_size // inner)
             for t in range(1, most + 1):
                 cells = t * inner
                 score = cells * cells / (1 << (cells - 1).bit_length())
@@ -316,11 +317,20 @@ class Sweep:
             else:
                 a_p, w_p = pulse_of_ratios(model.block, v["accel_ratio"], v["omega_ratio"])
             return jax.vmap(pulse_class(self.pulse))(jnp.asarray(a_p), jnp.asarray(w_p))
-        (rec,) = {int(i) for i in v["record"]}  # one record per chunk (`chunk_shape`)
-        scale = v.get("scale", np.ones(len(v["record"])))
-        # every record padded to the sweep's longest, under one name: one compiled program per sweep
+        import equinox as eqx
+
+        from ..io.scenes_file import stack
+
+        # every record padded to the sweep's longest, under one name: one compiled program per
+        # sweep, and scenes of several records in one batch (a bisection's)
+        which = np.asarray(v["record"]).astype(int)
+        scale = jnp.asarray(v.get("scale", np.ones(which.size)), dtype=float)
         longest = max(r.n for r in self.records)
-        return jax.vmap(self.records[rec].padded(longest, "record").scaled)(jnp.asarray(scale))
+        padded = {r: self.records[r].padded(longest, "record") for r in np.unique(which).tolist()}
+        if len(padded) == 1:
+            return jax.vmap(padded[int(which[0])].scaled)(scale)
+        base = stack([padded[r] for r in which.tolist()])
+        return eqx.tree_at(lambda e: e.scale, base, base.scale * scale)
 
 
 def run_chunk(sweep: Sweep, k: int, devices=None) -> dict[str, np.ndarray]:
@@ -332,7 +342,7 @@ def run_chunk(sweep: Sweep, k: int, devices=None) -> dict[str, np.ndarray]:
 
 def run_values(sweep: Sweep, v: dict[str, np.ndarray], devices=None) -> dict[str, np.ndarray]:
     """The summary outputs (and `status`, int32) of the scenes `v` (quantity → one value per scene,
-    as `Sweep.values_at` gives them; of one record), one array each. One model for all scenes
+    as `Sweep.values_at` gives them; of one record or several), one array each. One model for all scenes
     when no model quantity varies among them (a spectrum's grid), else one per scene; run in
     batches of at most `sweep.batch_limit` scenes, sharded over `devices` (None: every local one)."""
     import jax

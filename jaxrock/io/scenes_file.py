@@ -178,7 +178,7 @@ def _invalid_lanes(stacked) -> np.ndarray:
     return ~np.asarray(jax.vmap(lambda one: within_limits(one.limits()))(stacked))
 
 
-def _stack(objs):
+def stack(objs):
     """Stack the array leaves of structurally equal pytrees along a new leading axis."""
     dyn = [eqx.partition(o, eqx.is_array)[0] for o in objs]
     static = eqx.partition(objs[0], eqx.is_array)[1]
@@ -230,7 +230,7 @@ class Scenes:
         if exc in PULSES:
             return jax.vmap(pulse_class(exc))(jnp.asarray(self.params["a_p"][idx]), jnp.asarray(self.params["omega_p"][idx]))
         n = max(self.records[i].n for i in idx)  # records of distinct lengths, padded to one: one program
-        return _stack([self.records[i].padded(n, "record").scaled(self.params["scale"][i]) for i in idx])
+        return stack([self.records[i].padded(n, "record").scaled(self.params["scale"][i]) for i in idx])
 
 
 def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
