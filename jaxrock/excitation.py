@@ -236,6 +236,16 @@ class StillGround(AbstractExcitation):
         return jnp.full_like(jnp.asarray(t, dtype=float), jnp.inf)
 
 
+def crossing(t0, t1, a0, a1, level):
+    """The first time in [t0, t1] at which |üg| exceeds `level` where üg is linear from a0 (at t0)
+    to a1 (at t1) (+inf if none): |üg| is largest at an end."""
+    s = jnp.where(a1 >= 0, 1.0, -1.0)
+    rise = s * a1 - s * a0
+    frac = jnp.clip((level - s * a0) / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
+    tau = jnp.where(rise > 0, t0 + frac * (t1 - t0), t1)
+    return jnp.where(jnp.abs(a0) > level, t0, jnp.where(jnp.abs(a1) > level, tau, jnp.inf))
+
+
 class Record(AbstractExcitation):
     """A sampled ground-motion record: uniform step `dt` [s], accelerations `acc` [m/s²] from t = 0,
     linear between samples and zero outside, multiplied by `scale` (an array leaf: vmap over it).
@@ -324,12 +334,7 @@ class Record(AbstractExcitation):
         """The first time in [t, t_{k+1}] at which |üg| exceeds `level` on the linear piece of sample
         interval k ∋ t (+inf if none): |üg| is largest at an end of the piece."""
         t1 = self.dt * (k + 1)
-        a0, a1 = self(t), self(t1)
-        s = jnp.where(a1 >= 0, 1.0, -1.0)
-        rise = s * a1 - s * a0
-        frac = jnp.clip((level - s * a0) / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
-        tau = jnp.where(rise > 0, t + frac * (t1 - t), t1)
-        return jnp.where(jnp.abs(a0) > level, t, jnp.where(jnp.abs(a1) > level, tau, jnp.inf))
+        return crossing(t, t1, self(t), self(t1), level)
 
     def next_exceedance(self, t, level):
         t = jnp.asarray(t, dtype=float)

@@ -41,6 +41,7 @@ from .._rootfind import SafeNewton, bracketed_root
 from ..bookkeeping import Record
 from ..excitation import AbstractExcitation
 from ..excitation import Record as SampledRecord
+from ..excitation import crossing
 from ..geometry import G
 from ..model import AbstractIntegrator, AbstractStepper, FirstStepController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
@@ -395,9 +396,13 @@ class RigidStepper(AbstractStepper):
         # the next sample, or after the record the end of a free motion that overturns
         t_b = jnp.where(in_record, exc.dt * (c.k + 1).astype(c.t.dtype), c.t + 1e4 / p)
 
+        # everything this attempt evaluates lies on the current sample interval, where üg is one
+        # linear piece (zero after the record): read from the record once
+        record, exc = exc, _Piece.of(exc, c.k, in_record)
+
         # at rest: uplift on this interval, else on to its end
         rest = active & (c.mode == _REST)
-        t_up = exc.crossing(c.t, c.k, sc.level)
+        t_up = crossing(c.t, t_b, exc(c.t), exc(t_b), sc.level)
         up = rest & in_record & (t_up <= t_b)
         t_rest = jnp.where(up, t_up, t_b)
         side_up = -jnp.sign(exc(t_rest))
@@ -455,7 +460,7 @@ class RigidStepper(AbstractStepper):
         t_r = jnp.where(back_to_rest, c.t + self._min_step(sc, c.t), te)
         at_b = ok & ~event & ~back_to_rest & (t1 == t_b)
         # on reaching the record's end, the run goes on exactly when the free motion overturns
-        end_free = at_b & in_record & (c.k + 2 == exc.length) & (model.free_peak(thf, theta_dot_f, s) < sc.threshold)
+        end_free = at_b & in_record & (c.k + 2 == record.length) & (model.free_peak(thf, theta_dot_f, s) < sc.threshold)
         finished_r = hit_over | missed | end_free | (at_b & ~in_record)
 
         # merge: rest lanes, rocking lanes, finished lanes unchanged
@@ -544,6 +549,26 @@ class RigidStepper(AbstractStepper):
             rtol=integ.rtol, atol=integ.atol, dtmax=dtmax, step_ts=exc.step_ts
         )
         return term, event, controller
+
+
+class _Piece(eqx.Module):
+    """üg on one sample interval of a record: linear from `a0` at `t0` (what `RigidStepper._attempt`
+    evaluates, seven times per step, without reading the record again)."""
+
+    t0: Array
+    a0: Array
+    slope: Array
+    max_step: Array
+
+    @classmethod
+    def of(cls, exc: SampledRecord, k, in_record) -> "_Piece":
+        """Sample interval k of `exc` (zero after the record's end: `in_record` false)."""
+        a0, a1 = (exc.scale * exc.acc[jnp.minimum(i, exc.n - 1)] for i in (k, k + 1))
+        dt = exc.dt
+        return cls(dt * k.astype(dt.dtype), jnp.where(in_record, a0, 0.0), jnp.where(in_record, (a1 - a0) / dt, 0.0), dt)
+
+    def __call__(self, t):
+        return self.a0 + (t - self.t0) * self.slope
 
 
 def _interval(exc: SampledRecord, t):
