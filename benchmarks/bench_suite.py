@@ -1,15 +1,23 @@
 """Record suite, rigid model: jaxrock's least overturning factors (a vmapped sweep, then vmapped
-bisection) against the same search with the SciPy event loop (`jaxrock/numerics/scipy_rigid.py`: DOP853 with
-impact, apex and overturning events, stepping on every record sample), run by run as its users
-would script it.
+bisection) against the same search with the SciPy event loop (`jaxrock/numerics/scipy_rigid.py`:
+DOP853 with impact, apex and overturning events, stepping on every record sample), run by run as
+its users would script it; and the error of each against a tight reference.
 
-    python benchmarks/bench_suite.py [--refine 5]
+    python benchmarks/bench_suite.py [--refine 5] [--quick]
 
-Suite: the packaged El Centro 1940 NS, ARL360 (Northridge) and elCentro_peknold; 2h = 1, 4 m; tanα = 0.2; factors 0.25:4:16. Both peers run the same sweep and
-the same bisection (the first overturning factor of the sweep, bisected `refine` times against
-the one before it). jaxrock: the first call (with compilation, cache off) and the best of 2 warm
-calls; SciPy at its tuned setting of bench_rigid (DOP853 rtol 1e-6, max error in θ/α ≤ 1e-6 on
-pulses). Written to benchmarks/results/bench_suite.txt.
+Suite: the five packaged records and six synthetic ones (seeded, 10–90 s, dt 0.005–0.02 s:
+low-passed noise under a rise-and-decay envelope, peak 0.35 g), eleven distinct lengths; 2h = 1,
+4 m; tanα = 0.2; factors 0.25:4:16. Both peers run the same sweep and the same bisection (the first
+overturning factor of the sweep, bisected `refine` times against the one before it).
+
+- jaxrock: the first call (with compilation, cache off, the number of XLA compilations counted)
+  and the best of 2 warm calls; µs per record sample per run.
+- SciPy at its tuned setting of bench_rigid (DOP853 rtol 1e-6: max error in θ/α ≤ 1e-6 on pulses).
+- Error: max |θ|/α′ of jaxrock's default and of the SciPy loop at rtol 1e-6 against SciPy at
+  rtol 1e-12, on the cells the reference determines (SciPy at 1e-10 and 1e-12 within 1e-8), three
+  factors per record and size (below, near and above the least factor).
+
+Written to benchmarks/results/bench_suite.txt (`--quick`: 3 records, printed only).
 """
 
 from __future__ import annotations
@@ -22,14 +30,25 @@ from pathlib import Path
 
 os.environ.setdefault("JAXROCK_CACHE_DIR", "off")  # the first call's compilation is part of what is measured
 
+import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 
 import jaxrock as jr  # noqa: E402
+from jaxrock.analyses.engine import run_batch  # noqa: E402
 from jaxrock.numerics import scipy_rigid as sr  # noqa: E402
 
 LINES: list[str] = []
+COMPILATIONS = [0]
+
+
+def _count(event: str, *_args, **_kw) -> None:
+    if event == "/jax/core/compile/backend_compile_duration":
+        COMPILATIONS[0] += 1
+
+
+jax.monitoring.register_event_duration_secs_listener(_count)
 
 
 def out(line: str = "") -> None:
@@ -37,10 +56,28 @@ def out(line: str = "") -> None:
     LINES.append(line)
 
 
+def synthetic(seed: int, seconds: float, dt: float) -> jr.Record:
+    """Low-passed white noise under a rise-and-decay envelope, peak 0.35 g."""
+    rng = np.random.default_rng(seed)
+    n = int(round(seconds / dt)) + 1
+    t = dt * np.arange(n)
+    width = max(1, int(round(0.05 / dt)))
+    noise = np.convolve(rng.standard_normal(n + width), np.ones(width) / width, mode="same")[:n]
+    rise = seconds / 8
+    acc = noise * (t / rise) ** 2 * np.exp(2 - 2 * t / rise)
+    return jr.Record(0.35 * 9.81 * acc / np.max(np.abs(acc)), dt, name=f"synthetic {seconds:g} s")
+
+
+SYNTHETIC = [(11, 12.0, 0.005), (12, 20.0, 0.01), (13, 30.0, 0.02), (14, 45.0, 0.005), (15, 60.0, 0.01), (16, 90.0, 0.005)]
+
+
+def scipy_over(block, rec, scale, rtol):
+    return sr.solve_record(block, np.asarray(rec.acc), float(rec.dt), scale, rtol=rtol, atol=rtol * 1e-2)
+
+
 def scipy_least(block, rec, scales, refine, rtol):
     """The sweep, then the bisection, one SciPy run at a time: (least, low, runs)."""
-    acc, dt = np.asarray(rec.acc), float(rec.dt)
-    over = lambda s: sr.solve_record(block, acc, dt, s, rtol=rtol, atol=rtol * 1e-2).overturned
+    over = lambda s: scipy_over(block, rec, s, rtol).overturned
     flags = [over(s) for s in scales]
     runs = len(scales)
     if not any(flags):
@@ -54,26 +91,63 @@ def scipy_least(block, rec, scales, refine, rtol):
     return hi, lo, runs
 
 
+def errors(records, heights, tan_a, ds, scales):
+    """(jaxrock's and SciPy rtol 1e-6's max error against SciPy rtol 1e-12 on the determined cells,
+    cells determined, cells tried)."""
+    worst_jr, worst_sp, determined, tried = 0.0, 0.0, 0, 0
+    for r, rec in enumerate(records):
+        for i, h in enumerate(heights):
+            block = jr.Block.from_slenderness(h, tan_a)
+            least = float(ds.least_scale[r, i])
+            picks = sorted({0.5 * least, 0.98 * least, 1.5 * least} if np.isfinite(least) else {scales[len(scales) // 2], scales[-1]})
+            sol = run_batch(jr.RigidModel(block), jax.vmap(rec.scaled)(np.asarray(picks)))
+            for j, s in enumerate(picks):
+                tried += 1
+                ref = [scipy_over(block, rec, s, rt) for rt in (1e-10, 1e-12)]
+                if abs(ref[0].max_theta - ref[1].max_theta) > 1e-8 or ref[0].overturned != ref[1].overturned:
+                    continue
+                determined += 1
+                worst_jr = max(worst_jr, abs(float(sol.max_theta[j]) - ref[1].max_theta))
+                worst_sp = max(worst_sp, abs(scipy_over(block, rec, s, 1e-6).max_theta - ref[1].max_theta))
+    return worst_jr, worst_sp, determined, tried
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--refine", type=int, default=5)
+    ap.add_argument("--quick", action="store_true", help="3 records, printed only")
+    ap.add_argument("--jaxrock-only", action="store_true", help="no peer, no errors, printed only (to time an older jaxrock)")
     args = ap.parse_args()
-    records = jr.read_records(["arl360", "elcentro_peknold", "elcentro"])
+    records = jr.read_records(["builtin"]) + [synthetic(*s) for s in SYNTHETIC]
+    if args.quick:
+        records = records[:3]
     heights, tan_a, scales = [1.0, 4.0], 0.2, np.linspace(0.25, 4.0, 16)
-    out(f"# bench_suite: {len(records)} records × {len(heights)} sizes, tanα = {tan_a}, factors 0.25:4:16, refine {args.refine}, RM")
-    out(f"# machine: {platform.machine()} {os.cpu_count()} CPUs; jaxrock compilation cache off")
+    samples = {rec.name: rec.n for rec in records}
+    out(f"# bench_suite: {len(records)} records of {len(set(samples.values()))} distinct lengths "
+        f"({min(samples.values())}–{max(samples.values())} samples) × {len(heights)} sizes, tanα = {tan_a}, factors 0.25:4:16, "
+        f"refine {args.refine}, RM")
+    out(f"# machine: {platform.machine()} {os.cpu_count()} CPUs; jax {jax.__version__}; jaxrock compilation cache off")
     sweep = jr.Sweep.make("rigid", records=records, height=heights, tan_alpha=tan_a, scale=scales)
+    COMPILATIONS[0] = 0
     t0 = time.perf_counter()
     ds = jr.least_overturning_scale(sweep, refine=args.refine, progress=False)
-    first = time.perf_counter() - t0
+    first, compiled = time.perf_counter() - t0, COMPILATIONS[0]
     warm = []
     for _ in range(2):
         t0 = time.perf_counter()
         jr.least_overturning_scale(sweep, refine=args.refine, progress=False)
         warm.append(time.perf_counter() - t0)
-    runs_jr = sweep.size + args.refine * int(np.isfinite(ds.least_scale.values).sum())
+    found = np.isfinite(ds.least_scale.values)
+    runs_per_record = len(heights) * len(scales) + args.refine * found.sum(axis=1)
+    runs_jr = int(runs_per_record.sum())
+    samples_jr = int(sum(n * rec.n for n, rec in zip(runs_per_record, records)))
+    if args.jaxrock_only:
+        out(f"jaxrock: {runs_jr} record runs, {samples_jr} record samples in all; first call {first:.1f} s "
+            f"({compiled} XLA compilations), warm {min(warm):.2f} s ({1e3 * min(warm) / runs_jr:.2f} ms/run, "
+            f"{1e6 * min(warm) / samples_jr:.2f} µs per sample per run)")
+        return
     out()
-    out(f"{'record':<20}{'2h':>5}{'jaxrock least':>15}{'SciPy least':>13}{'same bracket':>14}")
+    out(f"{'record':<20}{'samples':>8}{'2h':>5}{'jaxrock least':>15}{'SciPy least':>13}{'same bracket':>14}")
     t0 = time.perf_counter()
     runs_sp, same = 0, 0
     for r, rec in enumerate(records):
@@ -84,18 +158,24 @@ def main():
             mine = float(ds.least_scale[r, i])
             agree = (mine == least) or (np.isinf(mine) and np.isinf(least))
             same += agree
-            out(f"{rec.name[:19]:<20}{h:5g}{mine:15.6g}{least:13.6g}{'yes' if agree else 'no':>14}")
+            out(f"{rec.name[:19]:<20}{rec.n:8d}{h:5g}{mine:15.6g}{least:13.6g}{'yes' if agree else 'no':>14}")
     scipy_s = time.perf_counter() - t0
     cells = len(records) * len(heights)
+    err_jr, err_sp, determined, tried = errors(records, heights, tan_a, ds, scales)
     out()
     out(f"same least factor (bit for bit: the same brackets): {same} of {cells} cells")
-    out(f"jaxrock: {runs_jr} record runs; first call {first:.1f} s (with compilation), warm {min(warm):.2f} s "
-        f"({1e3 * min(warm) / runs_jr:.1f} ms/run)")
+    out(f"jaxrock: {runs_jr} record runs, {samples_jr} record samples in all; first call {first:.1f} s "
+        f"({compiled} XLA compilations), warm {min(warm):.2f} s ({1e3 * min(warm) / runs_jr:.2f} ms/run, "
+        f"{1e6 * min(warm) / samples_jr:.2f} µs per sample per run)")
     out(f"SciPy DOP853 rtol 1e-6: {runs_sp} record runs in {scipy_s:.1f} s ({1e3 * scipy_s / runs_sp:.0f} ms/run)")
-    out(f"speed-up, warm: {scipy_s / min(warm):.0f}x; with jaxrock's compilation: {scipy_s / first:.1f}x")
-    path = HERE / "results" / "bench_suite.txt"
-    path.write_text("\n".join(LINES) + "\n")
-    print(f"wrote {path}")
+    out(f"speed-up per run, warm: {(scipy_s / runs_sp) / (min(warm) / runs_jr):.0f}x; "
+        f"whole suite with jaxrock's compilation: {scipy_s / first:.1f}x")
+    out(f"max |θ|/α′ error against SciPy rtol 1e-12, {determined} determined cells of {tried}: "
+        f"jaxrock default {err_jr:.1e}, SciPy rtol 1e-6 {err_sp:.1e}")
+    if not args.quick:
+        path = HERE / "results" / "bench_suite.txt"
+        path.write_text("\n".join(LINES) + "\n")
+        print(f"wrote {path}")
 
 
 if __name__ == "__main__":
