@@ -25,6 +25,15 @@ at each, so the remaining peaks can only decay and the next one is known in clos
 `cos(α − θ_peak) = cosα + E/p²` (after one more impact, E → η²E, if the block is moving inwards).
 The run stops there, unless that peak overturns the block, in which case it goes on to find the
 overturning time.
+
+Summaries on a sampled record (`jaxrock.Record`) go sample by sample instead (`RigidStepper._attempt`,
+issue 53): each attempt is one error-controlled step of the solver (diffrax's step and dense
+output, its PID controller's integral rule), to the next sample at most, on which üg is one linear
+piece; the first event of a step (the same three, in the same priority, plus the uplift of a block
+at rest, searched on the piece) is located on the step's dense output by a plain bracketed Newton
+loop (`jaxrock._rootfind.bracketed_root`) and differentiated implicitly. The rest, impact, Zeno
+and free-motion rules are the segment loop's. Under `vmap` the lanes of a batch then advance in
+lockstep through the samples, where the segment loop's lanes desynchronised at every impact.
 """
 
 from __future__ import annotations
@@ -65,7 +74,8 @@ class EventIntegrator(AbstractIntegrator):
     - `root_tol`: tolerance of the root finds that locate the events [s].
     - `zeno_time`, `zeno_velocity`: Zeno closure thresholds, in units of 1/p′ and p′α′ (see
       module docstring).
-    - `chunk_steps`: length of one loop iteration, in nominal steps. Under `vmap` all lanes move
+    - `chunk_steps`: length of one loop iteration, in nominal steps (step attempts in a paced
+      record run). Under `vmap` all lanes move
       in lock-step, one loop iteration at a time; cutting segments into time windows of about this
       many steps keeps a lane that chatters through many short segments from making every other
       lane wait a whole long segment per impact (measured in benchmarks/bench_rigid.py). Windows
