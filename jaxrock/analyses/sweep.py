@@ -159,16 +159,16 @@ class Sweep:
     @property
     def chunk_shape(self) -> tuple[int, ...]:
         """The chunk: `t` values of one axis and every axis inside it whole, one value of the axes
-        outside, at most `chunk_size` scenes (several records of a record sweep too: they are
-        padded to one length, `_excitations`). Of these the one that maximises
-        cells²/2^⌈log₂ cells⌉ (the batch engine pads a batch to a power-of-two multiple of its
-        smallest size: 2016 cells run at 2048, 2304 at 4096)."""
+        outside (records one at a time: an interrupted suite keeps each record's finished chunks),
+        at most `chunk_size` scenes. Of these the one that maximises cells²/2^⌈log₂ cells⌉ (the
+        batch engine pads a batch to a power-of-two multiple of its smallest size: 2016 cells run
+        at 2048, 2304 at 4096)."""
         shape, best, best_score = self.shape, (), -1.0
         for j in range(len(shape)):
             inner = math.prod(shape[j + 1 :])
-            if inner > self.chunk_size:
+            if inner > self.chunk_size or (j < len(shape) - 1 and self.dims[j + 1] == "record"):
                 continue
-            most = min(shape[j], self.chunk_size // inner)
+            most = 1 if self.dims[j] == "record" else min(shape[j], self.chunk_size // inner)
             for t in range(1, most + 1):
                 cells = t * inner
                 score = cells * cells / (1 << (cells - 1).bit_length())
