@@ -34,6 +34,21 @@ class _State(eqx.Module):
     done: Bool[Array, ""]
 
 
+def _rtsafe_step(y, f, df, lower, upper, flip, tol):
+    """One step from y (f = g(y), df = g′(y)) inside the bracket [lower, upper] (`flip`: g falls
+    across it): (the next y, the bracket narrowed to y's side)."""
+    o = jnp.where(flip, -f, f)  # oriented: o < 0 below the root
+    lower, upper = jnp.where(o < 0, y, lower), jnp.where(o < 0, upper, y)
+    newton = y - f / jnp.where(df == 0, 1.0, df)
+    ok = (df != 0) & (newton > lower) & (newton < upper)
+    # A Newton step below the tolerance has converged, even where it rounds onto the end of the
+    # bracket that y has just become (|f/df| below half an ulp of y): bisecting there instead
+    # restarted the search from the bracket's middle, ~40 halvings to reach the same root.
+    converged = (df != 0) & (jnp.abs(newton - y) < tol)
+    new_y = jnp.where(ok, newton, jnp.where(converged, jnp.clip(newton, lower, upper), 0.5 * (lower + upper)))
+    return jnp.where(f == 0, y, new_y), lower, upper
+
+
 class SafeNewton(optx.AbstractRootFinder):
     """Newton steps kept inside a shrinking sign-change bracket; bisection when they leave it."""
 
@@ -54,17 +69,8 @@ class SafeNewton(optx.AbstractRootFinder):
     def step(self, fn, y, args, options, state: _State, tags):
         y = jnp.clip(y, state.lower, state.upper)
         f, df, aux = jax.jvp(lambda t: _scalar(fn, t, args), (y,), (jnp.ones_like(y),), has_aux=True)
-        g = jnp.where(state.flip, -f, f)  # oriented: g < 0 below the root
-        lower = jnp.where(g < 0, y, state.lower)
-        upper = jnp.where(g < 0, state.upper, y)
-        newton = y - f / jnp.where(df == 0, 1.0, df)
-        ok = (df != 0) & (newton > lower) & (newton < upper)
-        # A Newton step below the tolerance has converged, even where it rounds onto the end of the
-        # bracket that y has just become (|f/df| below half an ulp of y): bisecting there instead
-        # restarted the search from the bracket's middle, ~40 halvings to reach the same root.
-        converged = (df != 0) & (jnp.abs(newton - y) < self.atol + self.rtol * jnp.abs(y))
-        new_y = jnp.where(ok, newton, jnp.where(converged, jnp.clip(newton, lower, upper), 0.5 * (lower + upper)))
-        new_y = jnp.where(state.done | (f == 0), y, new_y)
+        new_y, lower, upper = _rtsafe_step(y, f, df, state.lower, state.upper, state.flip, self.atol + self.rtol * jnp.abs(y))
+        new_y = jnp.where(state.done, y, new_y)
         return new_y, _State(lower, upper, state.flip, f, jnp.abs(new_y - y), state.done | (f == 0)), aux
 
     def terminate(self, fn, y, args, options, state: _State, tags):
@@ -95,13 +101,7 @@ def bracketed_root(g: Callable, params, lower, upper, tol, max_steps: int = 200)
     def body(s):
         t, lo, hi, _, k, done = s
         f, df = jax.jvp(frozen, (t,), (jnp.ones_like(t),))
-        o = jnp.where(flip, -f, f)  # oriented: o < 0 below the root
-        lo, hi = jnp.where(o < 0, t, lo), jnp.where(o < 0, hi, t)
-        newton = t - f / jnp.where(df == 0, 1.0, df)
-        inside = (df != 0) & (newton > lo) & (newton < hi)
-        converged = (df != 0) & (jnp.abs(newton - t) < tol * (1 + jnp.abs(t)))
-        new = jnp.where(inside, newton, jnp.where(converged, jnp.clip(newton, lo, hi), 0.5 * (lo + hi)))
-        new = jnp.where(f == 0, t, new)
+        new, lo, hi = _rtsafe_step(t, f, df, lo, hi, flip, tol * (1 + jnp.abs(t)))
         return new, lo, hi, jnp.abs(new - t), k + 1, done | (f == 0)
 
     def cond(s):

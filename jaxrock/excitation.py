@@ -330,12 +330,6 @@ class Record(AbstractExcitation):
         # a padded record's samples after its end are its end (no steps placed on them)
         return jnp.where(jnp.arange(self.n) < self.length, self.times, self.t_end)
 
-    def crossing(self, t, k, level):
-        """The first time in [t, t_{k+1}] at which |üg| exceeds `level` on the linear piece of sample
-        interval k ∋ t (+inf if none): |üg| is largest at an end of the piece."""
-        t1 = self.dt * (k + 1)
-        return crossing(t, t1, self(t), self(t1), level)
-
     def next_exceedance(self, t, level):
         t = jnp.asarray(t, dtype=float)
         a = jnp.abs(self.scale * self.acc)
@@ -345,12 +339,7 @@ class Record(AbstractExcitation):
         hit = (ts > t) & (a > level)
         k = jnp.argmax(hit)
         found = jnp.any(hit)
-        # crossing of s·üg = level on the linear piece from max(t, t_{k-1}) to t_k, s = sign(üg_k)
+        # the crossing on the linear piece from max(t, t_{k-1}) to t_k (|üg| ≤ level at its start)
         t_prev = jnp.maximum(ts[jnp.maximum(k - 1, 0)], t)
-        v_k = self.scale * self.acc[k]
-        s = jnp.where(v_k >= 0, 1.0, -1.0)
-        v_prev = s * self(t_prev)
-        rise = s * v_k - v_prev
-        frac = jnp.clip((level - v_prev) / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
-        tau = jnp.where(rise > 0, t_prev + frac * (ts[k] - t_prev), ts[k])
+        tau = crossing(t_prev, ts[k], self(t_prev), self.scale * self.acc[k], level)
         return jnp.where(now, t, jnp.where(found, tau, jnp.inf))

@@ -400,7 +400,7 @@ class RigidStepper(AbstractStepper):
         events) on the step's dense output."""
         model, integ = self.model, self.integrator
         solver = _stage_loop(integ)
-        alpha, p, eta, tiny = sc.alpha, sc.p, sc.eta, sc.tiny
+        alpha, p = sc.alpha, sc.p
         active = ~c.finished
         in_record = c.k < exc.length - 1
         # the next sample, or after the record the end of a free motion that overturns
