@@ -30,16 +30,17 @@ Model (ndm = 2, ndf = 3), SI units, unit out-of-plane thickness, conventions of 
   (a₁ EA sinθ θ̇ ≈ 70 m g at θ = 0.1 for the 50 m concrete column); the corotational current
   tangent acts on deformation only (its geometric part adds a₁ N θ̇ ≈ 1e-3 m g, negligible);
 - ground motion: the effective loads −M r üg(t) of the consistent mass as a `Plain` pattern with a
-  `Path` series sampled at dt/4 (Ricker pulse over ω_p t ∈ [−8, 8], |üg(±8)| = 7e-6 a_p) —
-  see `ground_motion_pattern` for why not `UniformExcitation`;
+  `Path` series sampled at dt/4 (Ricker pulse over ω_p t ∈ [−8, 8], |üg(±8)| = 7e-6 a_p), or at a
+  record's own samples (`run_record`) — see `ground_motion_pattern` for why not `UniformExcitation`;
 - time stepping: `Newmark` γ = 1/2, β = 1/4 (trapezoidal, no numerical damping), `Newton` with a
   `NormDispIncr` test (1e-10 α′, max 30 iterations), `BandGeneral`,
-  dt = min(T_p, 2π/p′)/`steps_per_period` (default 400, i.e. dt ≤ T_p/400); a failed step is
+  dt = min(T_p, 2π/p′)/`steps_per_period` (default 400, i.e. dt ≤ T_p/400), on a record its
+  sample step over `substeps`; a failed step is
   retried as 2, 4, … 64 substeps (`NewtonLineSearch` on the smallest ones);
 - stop rule (as jaxrock's): overturned when |θ| ≥ α′; after the pulse, stop once the rigid
   mechanical energy ½ Itot θ̇² + My θs log cosh(θ/θs) − m g h (1 − cosθ) falls below
   (margin ×) the potential at the largest |θ| so far (margin 1 for the quasi-rigid scene, 0.9 for
-  the flexible one), or at pulse end + 20·2π/p′.
+  the flexible one), or at the pulse's or record's end + 20·2π/p′.
 
 θ is positive counter-clockwise here (jaxrock: top to +x); only |θ| is compared.
 """
@@ -281,7 +282,24 @@ def run_pulse(sc: Scene, a_p, omega_p, *, steps_per_period=400, history=False, t
         ug = a_p * (x**2 / 3 - 3) * (x / math.sqrt(3)) * np.exp(-(x**2) / 6) / ANTI_BETA
     else:
         ug = ricker(a_p, omega_p, ts)
-    ops.timeSeries("Path", 3, "-dt", dt / 4, "-values", *ug.tolist())
+    return _transient(sc, ug, dt / 4, dt, dur, t_start, t_free, history, t0)
+
+
+def run_record(sc: Scene, acc, record_dt, scale=1.0, *, substeps=1, history=False, t_free=None):
+    """Ground-motion record (jaxrock.Record(acc, record_dt).scaled(scale): linear between samples
+    from t = 0, zero after its end) on scene `sc`, at dt = record_dt/`substeps` (what OpenSees users
+    run: the record's step, or a fraction of it). Returns what `run_pulse` returns."""
+    t0 = time.perf_counter()
+    build_model(sc)
+    ug = scale * np.asarray(acc, dtype=float)
+    dur = record_dt * (len(ug) - 1)
+    return _transient(sc, ug, record_dt, record_dt / substeps, dur, 0.0, t_free, history, t0)
+
+
+def _transient(sc: Scene, ug, series_dt, dt, dur, t_start, t_free, history, t0):
+    """The transient run on the built model: ground motion `ug` sampled at `series_dt` from
+    `t_start` (lasting `dur`), Newmark steps of `dt`, the stop rule of the module docstring."""
+    ops.timeSeries("Path", 3, "-dt", series_dt, "-values", *np.asarray(ug).tolist())
     ground_motion_pattern(sc, 3, 3)
     ops.system("BandGeneral")
     ops.numberer("RCM")
