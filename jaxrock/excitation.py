@@ -56,6 +56,12 @@ class AbstractExcitation(eqx.Module):
     def step_ts(self):
         """Times where the excitation has kinks (steps are placed on them), or None."""
 
+    def step_ts_from(self, t, m: int):
+        """The `step_ts` that a solve from `t` of at most `m` steps can reach (each step ends at the
+        next one at the latest): a solve carries its `step_ts` through every step, so a record's
+        whole sample grid would cost each step of a vmapped batch its length. Default: all of them."""
+        return self.step_ts
+
     @abc.abstractmethod
     def next_exceedance(self, t, level) -> Float[Array, ""]:
         """First time τ ≥ t with |üg(τ)| > level (τ = t if it already exceeds); +inf if none.
@@ -329,6 +335,14 @@ class Record(AbstractExcitation):
     def step_ts(self):
         # a padded record's samples after its end are its end (no steps placed on them)
         return jnp.where(jnp.arange(self.n) < self.length, self.times, self.t_end)
+
+    def step_ts_from(self, t, m: int):
+        # from the sample at or before t (one earlier against rounding), m + 1 samples: m steps
+        # end on m samples after t at the farthest
+        if m + 2 >= self.n:
+            return self.step_ts
+        k = jnp.clip(jnp.floor(jnp.asarray(t, dtype=float) / self.dt).astype(jnp.int32) - 1, 0, self.n - (m + 2))
+        return jax.lax.dynamic_slice(self.step_ts, (k,), (m + 2,))
 
     def next_exceedance(self, t, level):
         t = jnp.asarray(t, dtype=float)

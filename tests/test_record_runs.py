@@ -193,3 +193,19 @@ def test_a_paced_summary_agrees_with_its_history_run():
         assert float(summary.t_uplift) == pytest.approx(float(hist.t_uplift), abs=1e-9)
         peak = float(np.max(np.abs(np.asarray(hist.history["theta"])))) / float(m.block.alpha_r)
         assert 0.0 <= float(summary.max_theta) - peak < 2e-5, (float(summary.max_theta), peak)
+
+
+def test_spring_pieces_step_on_the_same_samples_as_one_whole_grid():
+    """The quasi-rigid SM's pieces carry only the record's samples that they can reach
+    (`Record.step_ts_from`), not the whole grid: the steps, hence the outputs, are the same bits as
+    with the whole grid (an excitation without the window), for the record and for the record
+    padded to a suite's longest."""
+    rec = RECORDS[1]
+    m = jr.SpringModel(jr.Block.from_slenderness(1.0, 0.2))
+    scales = jnp.asarray(FACTORS[:4]) * float(m.block.uplift_acceleration)
+    whole = run_batch(m, jax.vmap(lambda s: Unpaced(rec.scaled(s)))(scales))
+    assert np.all(np.asarray(whole.uplifted)) and not np.all(np.asarray(whole.overturned))
+    for r in (rec, rec.padded(3 * rec.n)):
+        windowed = run_batch(m, jax.vmap(r.scaled)(scales))
+        for name in ("max_theta", "t_overturn", "t_uplift"):
+            assert np.array_equal(np.asarray(getattr(windowed, name)), np.asarray(getattr(whole, name))), name

@@ -95,7 +95,9 @@ class SpringIntegrator(AbstractSpringIntegrator):
             rf = with_stepsize_controller_tols(diffrax.VeryChord)(linear_solver=_linalg.SequentialLU())
         return _IMPLICIT[self.solver](root_finder=rf)
 
-    def controller(self, system: SpringSystem, excitation: AbstractExcitation, dtmax=None):
+    def controller(self, system: SpringSystem, excitation: AbstractExcitation, dtmax=None, t0=0.0, max_steps=None):
+        """The step-size controller of a solve from `t0` of at most `max_steps` steps (None: the
+        integrator's): PID, clipped to the excitation's `step_ts` that the solve can reach."""
         pid = diffrax.PIDController(
             rtol=self.rtol,
             atol=self.atol * system.atol_scale(),
@@ -104,7 +106,8 @@ class SpringIntegrator(AbstractSpringIntegrator):
             dtmax=dtmax,
         )
         if excitation.step_ts is not None:
-            return diffrax.ClipStepSizeController(pid, step_ts=excitation.step_ts)
+            window = excitation.step_ts_from(t0, self.max_steps if max_steps is None else max_steps)
+            return diffrax.ClipStepSizeController(pid, step_ts=window)
         return pid
 
     def solve(
@@ -149,7 +152,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
             y0,
             args=(system, excitation),
             saveat=saveat,
-            stepsize_controller=FirstStepController(self.controller(system, excitation, dtmax), dt0, t_next),
+            stepsize_controller=FirstStepController(self.controller(system, excitation, dtmax, t0, max_steps), dt0, t_next),
             event=event,
             max_steps=self.max_steps if max_steps is None else max_steps,
             adjoint=diffrax_adjoint(self.autodiff),
