@@ -1,9 +1,11 @@
-"""Record suite, rigid model: jaxrock's least overturning factors (a vmapped sweep, then vmapped
-bisection) against the same search with the SciPy event loop (`jaxrock/numerics/scipy_rigid.py`:
-DOP853 with impact, apex and overturning events, stepping on every record sample), run by run as
-its users would script it; and the error of each against a tight reference.
+"""Record suite: jaxrock's least overturning factors (a vmapped sweep, then vmapped bisection)
+against its peers run by run as their users would script them, and the error of each against a
+tight reference. Rigid model (RM): the same search with the SciPy event loop
+(`jaxrock/numerics/scipy_rigid.py`: DOP853 with impact, apex and overturning events, stepping on
+every record sample). Quasi-rigid spring model (SM): the same suite in jaxrock, against OpenSeesPy
+(`jaxrock/numerics/opensees_sm.py`, `run_record`) on a seeded subsample of its runs.
 
-    python benchmarks/bench_suite.py [--refine 5] [--quick]
+    python benchmarks/bench_suite.py [--refine 5] [--quick] [--models rigid,spring] [--n-opensees 12]
 
 Suite: the five packaged records and six synthetic ones (seeded, 10–90 s, dt 0.005–0.02 s:
 low-passed noise under a rise-and-decay envelope, peak 0.35 g), eleven distinct lengths; 2h = 1,
@@ -16,6 +18,16 @@ overturning factor of the sweep, bisected `refine` times against the one before 
 - Error: max |θ|/α′ of jaxrock's default and of the SciPy loop at rtol 1e-6 against SciPy at
   rtol 1e-12, on the cells the reference determines (SciPy at 1e-10 and 1e-12 within 1e-8), three
   factors per record and size (below, near and above the least factor).
+
+SM (quasi-rigid, `jr.Sweep.make("spring", ...)`, the default integrator: Tsit5 at 1e-10):
+- jaxrock: the same suite and search, first call and one warm call; µs per sample per run.
+- OpenSeesPy on `--n-opensees` runs drawn from the suite's sweep (seeded): Newmark trapezoidal at
+  the record's step (what its users run) and at a 32nd of it (the step at which its error in
+  max θ/α′ falls to ~1e-3 on El Centro: it converges to a floor of ~2e-4, the sampled tanh
+  backbone's); µs per sample per run and the error of both and of jaxrock's default against
+  jaxrock at Tsit5 rtol = atol = 1e-12 on the runs that it determines (1e-11 and 1e-12 within
+  1e-6; OpenSees at a 128th of the step is within 1.6e-4 of it on El Centro ×1 and ×1.5 at
+  2h = 4 m).
 
 Written to benchmarks/results/bench_suite.txt (`--quick`: 3 records, printed only).
 """
@@ -112,41 +124,89 @@ def errors(records, heights, tan_a, ds, scales):
     return worst_jr, worst_sp, determined, tried
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--refine", type=int, default=5)
-    ap.add_argument("--quick", action="store_true", help="3 records, printed only")
-    ap.add_argument("--jaxrock-only", action="store_true", help="no peer, no errors, printed only (to time an older jaxrock)")
-    args = ap.parse_args()
-    records = jr.read_records(["builtin"]) + [synthetic(*s) for s in SYNTHETIC]
-    if args.quick:
-        records = records[:3]
-    heights, tan_a, scales = [1.0, 4.0], 0.2, np.linspace(0.25, 4.0, 16)
-    samples = {rec.name: rec.n for rec in records}
-    out(f"# bench_suite: {len(records)} records of {len(set(samples.values()))} distinct lengths "
-        f"({min(samples.values())}–{max(samples.values())} samples) × {len(heights)} sizes, tanα = {tan_a}, factors 0.25:4:16, "
-        f"refine {args.refine}, RM")
-    out(f"# machine: {platform.machine()} {os.cpu_count()} CPUs; jax {jax.__version__}; jaxrock compilation cache off")
-    sweep = jr.Sweep.make("rigid", records=records, height=heights, tan_alpha=tan_a, scale=scales)
+def suite_time(sweep, refine, warm_calls):
+    """(the result, the first call's seconds, its XLA compilations, the best warm call's seconds)."""
     COMPILATIONS[0] = 0
     t0 = time.perf_counter()
-    ds = jr.least_overturning_scale(sweep, refine=args.refine, progress=False)
+    ds = jr.least_overturning_scale(sweep, refine=refine, progress=False)
     first, compiled = time.perf_counter() - t0, COMPILATIONS[0]
     warm = []
-    for _ in range(2):
+    for _ in range(warm_calls):
         t0 = time.perf_counter()
-        jr.least_overturning_scale(sweep, refine=args.refine, progress=False)
+        jr.least_overturning_scale(sweep, refine=refine, progress=False)
         warm.append(time.perf_counter() - t0)
+    return ds, first, compiled, min(warm)
+
+
+def runs_and_samples(ds, records, n_sizes, n_scales, refine):
     found = np.isfinite(ds.least_scale.values)
-    runs_per_record = len(heights) * len(scales) + args.refine * found.sum(axis=1)
-    runs_jr = int(runs_per_record.sum())
-    samples_jr = int(sum(n * rec.n for n, rec in zip(runs_per_record, records)))
-    if args.jaxrock_only:
-        out(f"jaxrock: {runs_jr} record runs, {samples_jr} record samples in all; first call {first:.1f} s "
-            f"({compiled} XLA compilations), warm {min(warm):.2f} s ({1e3 * min(warm) / runs_jr:.2f} ms/run, "
-            f"{1e6 * min(warm) / samples_jr:.2f} µs per sample per run)")
-        return
+    per_record = n_sizes * n_scales + refine * found.sum(axis=1)
+    return int(per_record.sum()), int(sum(n * rec.n for n, rec in zip(per_record, records)))
+
+
+def spring_section(records, heights, tan_a, scales, args):
+    """The quasi-rigid SM: jaxrock's suite against OpenSeesPy on a seeded subsample of its runs."""
+    from jaxrock.numerics import opensees_sm as osm
+
     out()
+    out("## quasi-rigid SM (the default: Tsit5 rtol = atol = 1e-10) against OpenSeesPy")
+    sweep = jr.Sweep.make("spring", records=records, height=heights, tan_alpha=tan_a, scale=scales)
+    ds, first, compiled, warm = suite_time(sweep, args.refine, 1)
+    runs, samples = runs_and_samples(ds, records, len(heights), len(scales), args.refine)
+    us_jr = 1e6 * warm / samples
+    out(f"jaxrock: {runs} record runs, {samples} record samples in all; first call {first:.1f} s "
+        f"({compiled} XLA compilations), warm {warm:.2f} s ({1e3 * warm / runs:.1f} ms/run, {us_jr:.2f} µs per sample per run)")
+    rng = np.random.default_rng(0)
+    picks = [(int(rng.integers(len(records))), int(rng.integers(len(heights))), float(rng.choice(scales))) for _ in range(args.n_opensees)]
+    tight = {tol: jr.SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=4_000_000) for tol in (1e-11, 1e-12)}
+    peers = {"OpenSees dt = record dt": 1, "OpenSees dt = record dt/32": 32}
+    err = {k: 0.0 for k in ("jaxrock default", *peers)}
+    secs = {k: 0.0 for k in peers}
+    verdicts = {k: 0 for k in ("jaxrock default", *peers)}
+    peer_samples, determined = 0, 0
+    out(f"side by side, {len(picks)} runs drawn from the sweep (seed 0): max θ/α′")
+    out(f"{'record':<20}{'2h':>4}{'scale':>7}{'reference':>12}{'jaxrock':>12}" + "".join(f"{'OS dt/' + str(k):>12}" for k in peers.values()))
+    for r, i, s in picks:
+        rec, h = records[r], heights[i]
+        model = jr.SpringModel(jr.Block.from_slenderness(h, tan_a))
+        ref11, ref = (jr.simulate(model, rec.scaled(s), integrator=tight[tol]) for tol in (1e-11, 1e-12))
+        mine = jr.simulate(model, rec.scaled(s))
+        # determined: the reference at 1e-11 and 1e-12 within 1e-6, the same verdict
+        known = abs(float(ref11.max_theta) - float(ref.max_theta)) <= 1e-6 and bool(ref11.overturned) == bool(ref.overturned)
+        determined += known
+        sc = osm.Scene(h, h * tan_a, E=None, n_elements=1)
+        row = {"jaxrock default": (float(mine.max_theta), bool(mine.overturned))}
+        for name, k in peers.items():
+            o = osm.run_record(sc, np.asarray(rec.acc), float(rec.dt), s, substeps=k)
+            secs[name] += o["time"]
+            row[name] = (o["max_theta"], o["overturned"])
+        peer_samples += rec.n
+        for name, (m, over) in row.items():
+            if known:
+                err[name] = max(err[name], abs(m - float(ref.max_theta)))
+                verdicts[name] += over == bool(ref.overturned)
+        out(f"{rec.name[:19]:<20}{h:4g}{s:7.3g}{float(ref.max_theta):12.6f}{'' if known else '?':1}" + "".join(f"{row[n][0]:12.6f}" for n in row))
+    out(f"(?: not determined, the reference at Tsit5 1e-11 and 1e-12 more than 1e-6 apart; errors and verdicts on the {determined} others)")
+    out(f"{'':<44}{'µs/sample/run':>14}{'vs jaxrock':>11}{'max |Δ| vs reference':>22}{'same verdict':>14}")
+    out(f"{'jaxrock default (the whole suite, warm)':<44}{us_jr:14.2f}{'1':>11}{err['jaxrock default']:22.1e}{verdicts['jaxrock default']:>9d} of {determined}")
+    for name in peers:
+        us = 1e6 * secs[name] / peer_samples
+        out(f"{name + ' (build included)':<44}{us:14.2f}{us / us_jr:10.1f}x{err[name]:22.1e}{verdicts[name]:>9d} of {determined}")
+
+
+def rigid_section(records, heights, tan_a, scales, args):
+    """The RM: jaxrock's suite against the SciPy loop's same search, and both against a tight reference."""
+    out()
+    out("## RM against the SciPy event loop")
+    sweep = jr.Sweep.make("rigid", records=records, height=heights, tan_alpha=tan_a, scale=scales)
+    ds, first, compiled, warm = suite_time(sweep, args.refine, 2)
+    runs_jr, samples_jr = runs_and_samples(ds, records, len(heights), len(scales), args.refine)
+    line = (f"jaxrock: {runs_jr} record runs, {samples_jr} record samples in all; first call {first:.1f} s "
+            f"({compiled} XLA compilations), warm {warm:.2f} s ({1e3 * warm / runs_jr:.2f} ms/run, "
+            f"{1e6 * warm / samples_jr:.2f} µs per sample per run)")
+    if args.jaxrock_only:
+        out(line)
+        return
     out(f"{'record':<20}{'samples':>8}{'2h':>5}{'jaxrock least':>15}{'SciPy least':>13}{'same bracket':>14}")
     t0 = time.perf_counter()
     runs_sp, same = 0, 0
@@ -164,15 +224,37 @@ def main():
     err_jr, err_sp, determined, tried = errors(records, heights, tan_a, ds, scales)
     out()
     out(f"same least factor (bit for bit: the same brackets): {same} of {cells} cells")
-    out(f"jaxrock: {runs_jr} record runs, {samples_jr} record samples in all; first call {first:.1f} s "
-        f"({compiled} XLA compilations), warm {min(warm):.2f} s ({1e3 * min(warm) / runs_jr:.2f} ms/run, "
-        f"{1e6 * min(warm) / samples_jr:.2f} µs per sample per run)")
+    out(line)
     out(f"SciPy DOP853 rtol 1e-6: {runs_sp} record runs in {scipy_s:.1f} s ({1e3 * scipy_s / runs_sp:.0f} ms/run)")
-    out(f"speed-up per run, warm: {(scipy_s / runs_sp) / (min(warm) / runs_jr):.0f}x; "
+    out(f"speed-up per run, warm: {(scipy_s / runs_sp) / (warm / runs_jr):.0f}x; "
         f"whole suite with jaxrock's compilation: {scipy_s / first:.1f}x")
     out(f"max |θ|/α′ error against SciPy rtol 1e-12, {determined} determined cells of {tried}: "
         f"jaxrock default {err_jr:.1e}, SciPy rtol 1e-6 {err_sp:.1e}")
-    if not args.quick:
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--refine", type=int, default=5)
+    ap.add_argument("--quick", action="store_true", help="3 records, printed only")
+    ap.add_argument("--jaxrock-only", action="store_true", help="no peer, no errors, printed only (to time an older jaxrock)")
+    ap.add_argument("--models", default="rigid,spring", help="comma-separated: rigid (vs SciPy), spring (quasi-rigid SM vs OpenSeesPy)")
+    ap.add_argument("--n-opensees", type=int, default=12, help="SM runs drawn from the sweep for OpenSeesPy")
+    args = ap.parse_args()
+    models = args.models.split(",")
+    records = jr.read_records(["builtin"]) + [synthetic(*s) for s in SYNTHETIC]
+    if args.quick:
+        records = records[:3]
+    heights, tan_a, scales = [1.0, 4.0], 0.2, np.linspace(0.25, 4.0, 16)
+    samples = {rec.name: rec.n for rec in records}
+    out(f"# bench_suite: {len(records)} records of {len(set(samples.values()))} distinct lengths "
+        f"({min(samples.values())}–{max(samples.values())} samples) × {len(heights)} sizes, tanα = {tan_a}, factors 0.25:4:16, "
+        f"refine {args.refine}; {', '.join(models)}")
+    out(f"# machine: {platform.machine()} {os.cpu_count()} CPUs; jax {jax.__version__}; jaxrock compilation cache off")
+    if "rigid" in models:
+        rigid_section(records, heights, tan_a, scales, args)
+    if "spring" in models and not args.jaxrock_only:
+        spring_section(records, heights, tan_a, scales, args)
+    if not args.quick and not args.jaxrock_only and models == ["rigid", "spring"]:
         path = HERE / "results" / "bench_suite.txt"
         path.write_text("\n".join(LINES) + "\n")
         print(f"wrote {path}")
