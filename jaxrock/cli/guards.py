@@ -51,13 +51,14 @@ EXIT_INPUT = 2
 CELL_SECONDS = {"rigid": 0.19e-3, "spring": 1.47e-3, "spring-ga": 0.092e-3, "spring-flexible": 4.2e-3}
 # one run of a 40-s record. Rigid: its runs go sample by sample (issue 53); the default
 # record-spectrum (El Centro, 192 runs) takes 21 s cold, nearly all compilation, and
-# benchmarks/bench_suite.py's 432 runs of 11 records (2.4 M samples) 3.0 s warm, 1.24 µs per sample
-# per run; 0.03 s leaves room for small batches (a bisection's few cells). Spring models (measured
-# when a rigid run cost 0.15 s): the default suite's sweeps (5 records, 320 runs per model) ran the
-# quasi-rigid SM 1.5 times and the flexible SM 4.3 times as long as the rigid model; the flexible
-# default checked (`Checked`, issue 29) costs 1.7 times that (El Centro × 0.5 and × 1 on 4 and 20 m
-# columns, warm: 0.71 against 0.41 s in all)
-RECORD_RUN_SECONDS = {"rigid": 0.03, "spring": 0.23, "spring-flexible": 1.1}
+# benchmarks/bench_suite.py's 432 runs of 11 records (2.4 M samples) 3.0-4.7 s warm, 1.2-1.9 µs per
+# sample per run; 0.03 s leaves room for small batches (a bisection's few cells). Quasi-rigid SM:
+# the same suite 53 s warm, 21 µs per sample per run, 0.17 s for 40 s at dt = 0.005 s. Flexible SM
+# (measured when a rigid run cost 0.15 s): the default suite's sweeps (5 records, 320 runs per
+# model) ran it 4.3 times as long as the rigid model; the flexible default checked (`Checked`,
+# issue 29) costs 1.7 times that (El Centro × 0.5 and × 1 on 4 and 20 m columns, warm: 0.71
+# against 0.41 s in all)
+RECORD_RUN_SECONDS = {"rigid": 0.03, "spring": 0.17, "spring-flexible": 1.1}
 CELL_BYTES = 64  # a_p, ω_p, the grid, the results and the checkpoint's copy, per cell
 LIMIT_SECONDS, LIMIT_BYTES = 3600.0, 2e9
 EXIT_UNTRUSTED = 1  # the work ran, but some run ended with a status other than ok
