@@ -144,6 +144,12 @@ def runs_and_samples(ds, records, n_sizes, n_scales, refine):
     return int(per_record.sum()), int(sum(n * rec.n for n, rec in zip(per_record, records)))
 
 
+def jaxrock_line(runs, samples, first, compiled, warm):
+    return (f"jaxrock: {runs} record runs, {samples} record samples in all; first call {first:.1f} s "
+            f"({compiled} XLA compilations), warm {warm:.2f} s ({1e3 * warm / runs:.2f} ms/run, "
+            f"{1e6 * warm / samples:.2f} µs per sample per run)")
+
+
 def spring_section(records, heights, tan_a, scales, args):
     """The quasi-rigid SM: jaxrock's suite against OpenSeesPy on a seeded subsample of its runs."""
     from jaxrock.numerics import opensees_sm as osm
@@ -154,8 +160,7 @@ def spring_section(records, heights, tan_a, scales, args):
     ds, first, compiled, warm = suite_time(sweep, args.refine, 1)
     runs, samples = runs_and_samples(ds, records, len(heights), len(scales), args.refine)
     us_jr = 1e6 * warm / samples
-    out(f"jaxrock: {runs} record runs, {samples} record samples in all; first call {first:.1f} s "
-        f"({compiled} XLA compilations), warm {warm:.2f} s ({1e3 * warm / runs:.1f} ms/run, {us_jr:.2f} µs per sample per run)")
+    out(jaxrock_line(runs, samples, first, compiled, warm))
     rng = np.random.default_rng(0)
     picks = [(int(rng.integers(len(records))), int(rng.integers(len(heights))), float(rng.choice(scales))) for _ in range(args.n_opensees)]
     tight = {tol: jr.SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=4_000_000) for tol in (1e-11, 1e-12)}
@@ -201,9 +206,7 @@ def rigid_section(records, heights, tan_a, scales, args):
     sweep = jr.Sweep.make("rigid", records=records, height=heights, tan_alpha=tan_a, scale=scales)
     ds, first, compiled, warm = suite_time(sweep, args.refine, 2)
     runs_jr, samples_jr = runs_and_samples(ds, records, len(heights), len(scales), args.refine)
-    line = (f"jaxrock: {runs_jr} record runs, {samples_jr} record samples in all; first call {first:.1f} s "
-            f"({compiled} XLA compilations), warm {warm:.2f} s ({1e3 * warm / runs_jr:.2f} ms/run, "
-            f"{1e6 * warm / samples_jr:.2f} µs per sample per run)")
+    line = jaxrock_line(runs_jr, samples_jr, first, compiled, warm)
     if args.jaxrock_only:
         out(line)
         return

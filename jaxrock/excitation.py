@@ -337,12 +337,13 @@ class Record(AbstractExcitation):
         return jnp.where(jnp.arange(self.n) < self.length, self.times, self.t_end)
 
     def step_ts_from(self, t, m: int):
-        # from the sample at or before t (one earlier against rounding), m + 1 samples: m steps
-        # end on m samples after t at the farthest
+        # m + 2 samples: the one before the sample at or before t (against rounding), that one, and
+        # the m after it, on which m steps end at the farthest; `step_ts` of those alone
         if m + 2 >= self.n:
             return self.step_ts
         k = jnp.clip(jnp.floor(jnp.asarray(t, dtype=float) / self.dt).astype(jnp.int32) - 1, 0, self.n - (m + 2))
-        return jax.lax.dynamic_slice(self.step_ts, (k,), (m + 2,))
+        i = k + jnp.arange(m + 2)
+        return jnp.where(i < self.length, self.dt * i, self.t_end)
 
     def next_exceedance(self, t, level):
         t = jnp.asarray(t, dtype=float)

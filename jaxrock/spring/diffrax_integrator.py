@@ -140,6 +140,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
             saveat = diffrax.SaveAt(t1=True)
         if dtmax is None:
             dtmax = excitation.max_step
+        max_steps = self.max_steps if max_steps is None else max_steps
         term = diffrax.ODETerm(lambda t, y, args: args[0].vector_field(t, y, args[1]))
         t0 = jnp.asarray(t0, dtype=float)
         dt0 = jnp.asarray(first_step(system, dtmax), dtype=float)
@@ -154,7 +155,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
             saveat=saveat,
             stepsize_controller=FirstStepController(self.controller(system, excitation, dtmax, t0, max_steps), dt0, t_next),
             event=event,
-            max_steps=self.max_steps if max_steps is None else max_steps,
+            max_steps=max_steps,
             adjoint=diffrax_adjoint(self.autodiff),
             throw=throw,
         )
