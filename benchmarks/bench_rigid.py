@@ -115,7 +115,7 @@ def main() -> None:
 
     # --- jaxrock default integrator, via overturning_spectrum if present ------------------------
     default = jr.EventIntegrator()
-    DEFAULT_NAME = f"{type(default.solver).__name__}, rtol {default.rtol:.0e}"
+    DEFAULT_NAME = f"{type(default.solver).__name__}, rtol {default.tolerances(None)[0]:.0e}"
     rows = []
     spec_fn = getattr(jr, "overturning_spectrum", None)
     if spec_fn is None:

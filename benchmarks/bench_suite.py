@@ -5,7 +5,7 @@ tight reference. Rigid model (RM): the same search with the SciPy event loop
 every record sample). Quasi-rigid spring model (SM): the same suite in jaxrock, against OpenSeesPy
 (`jaxrock/numerics/opensees_sm.py`, `run_record`) on a seeded subsample of its runs.
 
-    python benchmarks/bench_suite.py [--refine 5] [--quick] [--models rigid,spring] [--n-opensees 12]
+    python benchmarks/bench_suite.py [--refine 5] [--quick] [--models rigid,spring] [--n-opensees 12] [--rtols ...]
 
 Suite: the five packaged records and six synthetic ones (seeded, 10–90 s, dt 0.005–0.02 s:
 low-passed noise under a rise-and-decay envelope, peak 0.35 g), eleven distinct lengths; 2h = 1,
@@ -28,6 +28,10 @@ SM (quasi-rigid, `jr.Sweep.make("spring", ...)`, the default integrator: Tsit5 a
   jaxrock at Tsit5 rtol = atol = 1e-12 on the runs that it determines (1e-11 and 1e-12 within
   1e-6; OpenSees at a 128th of the step is within 1.6e-4 of it on El Centro ×1 and ×1.5 at
   2h = 4 m).
+
+`--rtols 1e-8,...,1e-12`: instead, the RM's record runs over the step tolerance: the same suite at
+each rtol, warm time against the error on the cells above (what chose `RECORD_TOLERANCES`),
+written to benchmarks/results/bench_suite_rtol.txt.
 
 Written to benchmarks/results/bench_suite.txt (`--quick`: 3 records, printed only).
 """
@@ -103,25 +107,39 @@ def scipy_least(block, rec, scales, refine, rtol):
     return hi, lo, runs
 
 
-def errors(records, heights, tan_a, ds, scales):
-    """(jaxrock's and SciPy rtol 1e-6's max error against SciPy rtol 1e-12 on the determined cells,
-    cells determined, cells tried)."""
-    worst_jr, worst_sp, determined, tried = 0.0, 0.0, 0, 0
+def reference_cells(records, heights, tan_a, ds, scales):
+    """The cells of the error check: three factors per record and size (below, near and above the
+    least factor of `ds`), each with SciPy at rtol 1e-12 where it determines max |θ|/α′ (SciPy at
+    1e-10 and 1e-12 within 1e-8, the same verdict), None where it does not."""
+    cells = []
     for r, rec in enumerate(records):
         for i, h in enumerate(heights):
             block = jr.Block.from_slenderness(h, tan_a)
             least = float(ds.least_scale[r, i])
             picks = sorted({0.5 * least, 0.98 * least, 1.5 * least} if np.isfinite(least) else {scales[len(scales) // 2], scales[-1]})
-            sol = run_batch(jr.RigidModel(block), jax.vmap(rec.scaled)(np.asarray(picks)))
-            for j, s in enumerate(picks):
-                tried += 1
+            refs = []
+            for s in picks:
                 ref = [scipy_over(block, rec, s, rt) for rt in (1e-10, 1e-12)]
-                if abs(ref[0].max_theta - ref[1].max_theta) > 1e-8 or ref[0].overturned != ref[1].overturned:
-                    continue
+                known = abs(ref[0].max_theta - ref[1].max_theta) <= 1e-8 and ref[0].overturned == ref[1].overturned
+                refs.append(ref[1].max_theta if known else None)
+            cells.append((rec, block, picks, refs))
+    return cells
+
+
+def max_error(cells, run):
+    """The largest |run(rec, block, factors) − reference| over the determined cells, and their number."""
+    worst, determined = 0.0, 0
+    for rec, block, picks, refs in cells:
+        got = run(rec, block, picks)
+        for g, ref in zip(got, refs):
+            if ref is not None:
                 determined += 1
-                worst_jr = max(worst_jr, abs(float(sol.max_theta[j]) - ref[1].max_theta))
-                worst_sp = max(worst_sp, abs(scipy_over(block, rec, s, 1e-6).max_theta - ref[1].max_theta))
-    return worst_jr, worst_sp, determined, tried
+                worst = max(worst, abs(float(g) - ref))
+    return worst, determined
+
+
+def jaxrock_runs(integrator=None):
+    return lambda rec, block, picks: run_batch(jr.RigidModel(block), jax.vmap(rec.scaled)(np.asarray(picks)), integrator).max_theta
 
 
 def suite_time(sweep, refine, warm_calls):
@@ -224,7 +242,10 @@ def rigid_section(records, heights, tan_a, scales, args):
             out(f"{rec.name[:19]:<20}{rec.n:8d}{h:5g}{mine:15.6g}{least:13.6g}{'yes' if agree else 'no':>14}")
     scipy_s = time.perf_counter() - t0
     cells = len(records) * len(heights)
-    err_jr, err_sp, determined, tried = errors(records, heights, tan_a, ds, scales)
+    cells = reference_cells(records, heights, tan_a, ds, scales)
+    tried = sum(len(c[2]) for c in cells)
+    err_jr, determined = max_error(cells, jaxrock_runs())
+    err_sp, _ = max_error(cells, lambda rec, block, picks: [scipy_over(block, rec, s, 1e-6).max_theta for s in picks])
     out()
     out(f"same least factor (bit for bit: the same brackets): {same} of {cells} cells")
     out(line)
@@ -235,6 +256,26 @@ def rigid_section(records, heights, tan_a, scales, args):
         f"jaxrock default {err_jr:.1e}, SciPy rtol 1e-6 {err_sp:.1e}")
 
 
+def rtol_study(records, heights, tan_a, scales, args):
+    """The RM's record runs over the step tolerance: the same suite and search at each rtol (atol =
+    rtol/100), warm time against the error on the reference cells (picked from the first rtol's
+    least factors) and the least factors against the first rtol's."""
+    out()
+    out("## RM on records: error against run time over the step tolerance (atol = rtol/100)")
+    out(f"{'rtol':>8}{'first s':>9}{'warm s':>8}{'µs/sample/run':>15}{'max |Δθ|/α′':>13}{'determined':>12}{'same least':>12}")
+    cells = base = None
+    for rtol in args.rtols:
+        integ = jr.EventIntegrator(rtol=rtol, atol=rtol * 1e-2)
+        sweep = jr.Sweep.make("rigid", records=records, height=heights, tan_alpha=tan_a, scale=scales, integrator=integ)
+        ds, first, _, warm = suite_time(sweep, args.refine, 2)
+        if cells is None:
+            cells, base = reference_cells(records, heights, tan_a, ds, scales), ds.least_scale.values
+        err, determined = max_error(cells, jaxrock_runs(integ))
+        runs, samples = runs_and_samples(ds, records, len(heights), len(scales), args.refine)
+        same = int(np.sum(ds.least_scale.values == base))
+        out(f"{rtol:8.0e}{first:9.1f}{warm:8.2f}{1e6 * warm / samples:15.2f}{err:13.1e}{determined:12d}{same:>7d} of {base.size}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--refine", type=int, default=5)
@@ -242,8 +283,11 @@ def main():
     ap.add_argument("--jaxrock-only", action="store_true", help="no peer, no errors, printed only (to time an older jaxrock)")
     ap.add_argument("--models", default="rigid,spring", help="comma-separated: rigid (vs SciPy), spring (quasi-rigid SM vs OpenSeesPy)")
     ap.add_argument("--n-opensees", type=int, default=12, help="SM runs drawn from the sweep for OpenSeesPy")
+    ap.add_argument("--rtols", type=lambda v: [float(x) for x in v.split(",")], default=None,
+                    help="comma-separated: only the RM's tolerance study at these rtols (the first picks the error cells), "
+                         "written to bench_suite_rtol.txt")
     args = ap.parse_args()
-    models = args.models.split(",")
+    models = ["rigid"] if args.rtols else args.models.split(",")
     records = jr.read_records(["builtin"]) + [synthetic(*s) for s in SYNTHETIC]
     if args.quick:
         records = records[:3]
@@ -253,6 +297,13 @@ def main():
         f"({min(samples.values())}–{max(samples.values())} samples) × {len(heights)} sizes, tanα = {tan_a}, factors 0.25:4:16, "
         f"refine {args.refine}; {', '.join(models)}")
     out(f"# machine: {platform.machine()} {os.cpu_count()} CPUs; jax {jax.__version__}; jaxrock compilation cache off")
+    if args.rtols:
+        rtol_study(records, heights, tan_a, scales, args)
+        if not args.quick:
+            path = HERE / "results" / "bench_suite_rtol.txt"
+            path.write_text("\n".join(LINES) + "\n")
+            print(f"wrote {path}")
+        return
     if "rigid" in models:
         rigid_section(records, heights, tan_a, scales, args)
     if "spring" in models and not args.jaxrock_only:

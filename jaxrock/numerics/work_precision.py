@@ -199,6 +199,7 @@ def rigid_panel(panel, s: Settings):
     import diffrax
 
     import jaxrock as jr
+    from jaxrock.rigid.event_integrator import PULSE_TOLERANCES
 
     model = model_of("rigid")
     ref = _reference(panel, s, model)
@@ -206,7 +207,7 @@ def rigid_panel(panel, s: Settings):
     series = []
     solvers = (("Tsit5", diffrax.Tsit5()), ("Dopri5", diffrax.Dopri5()), ("Dopri8", diffrax.Dopri8()))
     for name, solver in (solvers[::2] if s.quick else solvers):  # quick: Tsit5 and Dopri8
-        at_default = lambda r: name == "Tsit5" and r == default.rtol  # the default is Tsit5 at rtol 1e-8, atol rtol/100
+        at_default = lambda r: name == "Tsit5" and r == PULSE_TOLERANCES[0]  # the default on pulses: Tsit5 at rtol 1e-8, atol rtol/100
         pts = [(f"rtol {r:g}" + (" (default)" if at_default(r) else ""),
                 default if at_default(r) else jr.EventIntegrator(solver=solver, rtol=r, atol=r * 1e-2), at_default(r)) for r in s.rtols]
         series.append((f"jaxrock {name}", pts))

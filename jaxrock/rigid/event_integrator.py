@@ -60,6 +60,9 @@ if TYPE_CHECKING:
 
 _REST, _ROCKING, _OVERTURNED = 0, 1, 2
 
+PULSE_TOLERANCES = (1e-8, 1e-10)  # (rtol, atol) of `EventIntegrator` on analytic excitations
+RECORD_TOLERANCES = (1e-12, 1e-14)  # and on sampled records (its docstring)
+
 
 class EventIntegrator(AbstractIntegrator):
     """Settings of the rigid model's event-driven integration.
@@ -67,10 +70,18 @@ class EventIntegrator(AbstractIntegrator):
     - `solver`: an explicit diffrax solver (default `Tsit5`: on the benchmark grid it reaches a
       given error in θ/α at about half the cost of `Dopri8`, whose 13 stages do not pay back at
       the step sizes the excitation and the events impose; see benchmarks/bench_rigid.py).
-    - `rtol`, `atol`: step-size control tolerances (on θ [rad] and θ̇ [rad/s]). Default 1e-8,
-      1e-10: max |Δ max θ/α′| ≤ 1.4e-7 against a converged reference on the benchmark's 64 × 64
-      pulse grid and three more families of 32 × 32 (other slenderness, size and pulse shape;
-      benchmarks/bench_rigid.py), the error falling with rtol (8e-10 at 1e-10, 3e-11 at 1e-12).
+    - `rtol`, `atol`: step-size control tolerances (on θ [rad] and θ̇ [rad/s]); None: by the
+      excitation (`tolerances`), an `atol` left None is rtol/100.
+      Analytic pulses: 1e-8, 1e-10 (`PULSE_TOLERANCES`): max |Δ max θ/α′| ≤ 1.4e-7 against a
+      converged reference on the benchmark's 64 × 64 pulse grid and three more families of
+      32 × 32 (other slenderness, size and pulse shape; benchmarks/bench_rigid.py), the error
+      falling with rtol (8e-10 at 1e-10, 3e-11 at 1e-12).
+      Sampled records: 1e-12, 1e-14 (`RECORD_TOLERANCES`): on the record suite of
+      benchmarks/bench_suite.py (11 records, 59 cells against SciPy at rtol 1e-12;
+      results/bench_suite_rtol.txt) max |Δθ|/α′ falls from 2.4e-5 at 1e-8 to 6.9e-7 at 1e-11 and
+      3.6e-7 at 1e-12, for 16 % more time than at 1e-8: a record's steps are capped by its
+      samples, so a tighter tolerance costs little there, where on a pulse every step is the
+      tolerance's.
     - `root_tol`: tolerance of the root finds that locate the events [s].
     - `zeno_time`, `zeno_velocity`: Zeno closure thresholds, in units of 1/p′ and p′α′ (see
       module docstring).
@@ -89,8 +100,8 @@ class EventIntegrator(AbstractIntegrator):
     """
 
     solver: diffrax.AbstractSolver = diffrax.Tsit5()
-    rtol: float = 1e-8
-    atol: float = 1e-10
+    rtol: float | None = None
+    atol: float | None = None
     root_tol: float = 1e-13
     zeno_time: float = 1e-4
     zeno_velocity: float = 1e-9
@@ -101,6 +112,14 @@ class EventIntegrator(AbstractIntegrator):
 
     def __check_init__(self):
         check_autodiff(self.autodiff)
+
+    def tolerances(self, exc: AbstractExcitation) -> tuple[float, float]:
+        """(rtol, atol) on `exc`: the fields where given, else `RECORD_TOLERANCES` on a sampled
+        record and `PULSE_TOLERANCES` on anything else; atol = rtol/100 where only rtol is given."""
+        rtol0, atol0 = RECORD_TOLERANCES if isinstance(exc, SampledRecord) else PULSE_TOLERANCES
+        rtol = rtol0 if self.rtol is None else self.rtol
+        atol = (atol0 if self.rtol is None else 1e-2 * rtol) if self.atol is None else self.atol
+        return rtol, atol
 
     def stepper(self, model: "RigidModel", system=None, save: Save | None = None, t1=None) -> "RigidStepper":
         """`AbstractIntegrator.stepper`: the segment loop, one segment or window per step."""
@@ -433,7 +452,8 @@ class RigidStepper(AbstractStepper):
         state0 = solver.init(term, c.t, t1, y0, s)
         y1, y_err, dense, _, _ = solver.step(term, c.t, t1, y0, s, state0, made_jump=False)
         # error control as diffrax's PIDController (its defaults: an integral controller)
-        scale = [integ.atol + integ.rtol * jnp.maximum(jnp.abs(a), jnp.abs(b)) for a, b in zip(y0, y1)]
+        rtol, atol = integ.tolerances(record)
+        scale = [atol + rtol * jnp.maximum(jnp.abs(a), jnp.abs(b)) for a, b in zip(y0, y1)]
         err = jnp.sqrt(0.5 * sum((e / sc_) ** 2 for e, sc_ in zip(y_err, scale)))
         finite = jnp.isfinite(y1[0]) & jnp.isfinite(y1[1]) & jnp.isfinite(err)
         ok = finite & (err <= 1)
@@ -555,9 +575,8 @@ class RigidStepper(AbstractStepper):
             root_finder=SafeNewton(rtol=integ.root_tol, atol=integ.root_tol),
             direction=[True, False, False],
         )
-        controller = diffrax.PIDController(
-            rtol=integ.rtol, atol=integ.atol, dtmax=dtmax, step_ts=exc.step_ts
-        )
+        rtol, atol = integ.tolerances(exc)
+        controller = diffrax.PIDController(rtol=rtol, atol=atol, dtmax=dtmax, step_ts=exc.step_ts)
         return term, event, controller
 
 
