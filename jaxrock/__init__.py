@@ -47,6 +47,7 @@ _EXPORTS = {
                      "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
                      "rm_target", "Sweep", "run_sweep", "least_overturning_scale", "Boundary", "find_boundary",
                      "boundary_slope"], "analyses"),
+    "use_cpu_cores": "runtime",
     "calibration_report": "reports",  # writes figures: matplotlib is imported with it
 }
 __all__ = list(_EXPORTS)

@@ -9,7 +9,8 @@ finishes, whoever imports it, or at once if JAX is already imported:
 - `jax_enable_x64` on (jaxrock runs in float64 only; `JAXROCK_X64` other than 1 is refused);
 - the persistent compilation cache (`jaxrock.cache.enable_compilation_cache`).
 
-Nothing is written to the environment, so child processes are left as they were.
+`use_cpu_cores()` (called by the command line; a library user's choice) gives the CPU backend one
+device per core. Nothing is written to the environment, so child processes are left as they were.
 """
 
 from __future__ import annotations
@@ -70,10 +71,36 @@ def on_jax_import(fn) -> None:
         sys.meta_path.insert(0, _AfterJaxImport())
 
 
+def cpu_cores() -> int:
+    """The CPU cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def use_cpu_cores(n: int | None = None) -> None:
+    """Give JAX's CPU backend one device per core (`n` devices; None: `cpu_cores()`), so that a
+    sweep on a CPU runs one chunk per core (`jaxrock.run_sweep`: a device runs one computation at
+    a time, whatever its cores). Takes effect if called before JAX starts its backends (its first
+    computation); the command line calls it first thing. Left alone where `XLA_FLAGS` already sets
+    a host device count."""
+    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
+        return
+    n = cpu_cores() if n is None else int(n)
+
+    def configure():
+        import jax
+
+        try:
+            jax.config.update("jax_num_cpu_devices", n)
+        except RuntimeError:  # the backends have started: they keep their devices
+            pass
+
+    on_jax_import(configure)
+
+
 def install() -> None:
     """Configure JAX now if it is imported, else as soon as it is."""
     check_x64_variable()
     on_jax_import(configure_jax)
 
 
-__all__ = ["install", "configure_jax", "check_x64_variable", "on_jax_import"]
+__all__ = ["install", "configure_jax", "check_x64_variable", "on_jax_import", "use_cpu_cores", "cpu_cores"]

@@ -186,25 +186,38 @@ def test_a_damaged_store_is_named_and_its_chunk_run_again(tmp_path, damage):
 _SHARDED = textwrap.dedent("""
     import jax, numpy as np
     import jaxrock as jr
-    from jaxrock.analyses import kernels
+    from jaxrock.analyses import sweep as sweep_module
+    from jaxrock.analyses.engine import run_batch
     from jaxrock.analyses.sweep import Sweep, run_sweep
     assert len(jax.local_devices()) == 4
-    for sw in (Sweep.make("rigid", height=[2.0, 8.0], accel_ratio=np.linspace(0.8, 8, 5), omega_ratio=np.linspace(1, 12, 6)),
-               Sweep.make("spring", accel_ratio=[1.5, 4.0, 7.0], omega_ratio=np.linspace(2, 10, 5))):
+    used, run_chunk = set(), sweep_module.run_chunk
+    sweep_module.run_chunk = lambda sw, k, devices: used.add(devices[0].id) or run_chunk(sw, k, devices)
+    same = lambda x, y: np.array_equal(np.asarray(x).view(np.uint8), np.asarray(y).view(np.uint8))
+    for sw in (Sweep.make("rigid", height=[2.0, 8.0], accel_ratio=np.linspace(0.8, 8, 5), omega_ratio=np.linspace(1, 12, 6), chunk_size=8),
+               Sweep.make("spring", accel_ratio=[1.5, 4.0, 7.0], omega_ratio=np.linspace(2, 10, 5), chunk_size=4)):
         one = run_sweep(sw, devices=jax.local_devices()[:1], progress=False)
+        used.clear()
         four = run_sweep(sw, progress=False)
+        assert len(used) == 4, used  # a chunk per device at a time
         for name in ("max_theta", "t_uplift", "t_overturn", "overturned", "uplifted", "n_impacts", "status"):
-            x, y = one[name].values, four[name].values
-            assert np.array_equal(x.view(np.uint8), y.view(np.uint8)), (sw.model, name)
+            assert same(one[name].values, four[name].values), (sw.model, name)
         assert (one.status.values == 0).all() and one.overturned.any()
-    assert any(key[1] is not None and key[1].size == 4 for key in kernels._KERNELS if isinstance(key, tuple) and len(key) == 2)
+    # a batch's passes sharded over the four devices (`NamedSharding`, explicit devices): each device
+    # runs its block at a quarter of the batch size, so the last bits may move as in another batch
+    # (`run_batch`: 1e-10); here one cell by one ulp
+    m = jr.RigidModel(jr.Block.from_slenderness(3.0, 0.2))
+    pulses = jax.vmap(jr.RickerPulse)(np.linspace(1.0, 6.0, 24), np.linspace(2.0, 12.0, 24))
+    a, b = run_batch(m, pulses), run_batch(m, pulses, devices=jax.local_devices())
+    assert np.array_equal(a.overturned, b.overturned) and np.max(np.abs(a.max_theta - b.max_theta)) <= 1e-10
     print("SAME BITS")
 """)
 
 
 def test_sharded_over_four_host_devices_is_bit_identical():
-    """Chunks sharded over 4 forced host devices (`NamedSharding` of a 1-D mesh) give one device's
-    bits: the rigid model with a model per scene, the quasi-rigid spring model (refilled lanes)."""
+    """A sweep over 4 forced host devices runs a chunk per device at a time (each from its own
+    thread) and gives one device's bits: the rigid model with a model per scene, the quasi-rigid
+    spring model (refilled lanes). A batch's passes sharded over them (a 1-D mesh): one device's
+    numbers to the bound of another batch size."""
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=4", "JAX_PLATFORMS": "cpu"}
     r = subprocess.run([sys.executable, "-c", _SHARDED], env=env, capture_output=True, text=True, timeout=280)
     assert r.returncode == 0 and "SAME BITS" in r.stdout, r.stderr[-3000:]

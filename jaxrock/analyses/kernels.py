@@ -24,6 +24,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import pickle
+import threading
 from importlib import metadata
 from pathlib import Path
 
@@ -80,6 +81,7 @@ def _pass(leaves_s, leaves_e, leaves_c, n, *, trees, statics, batched):
 
 
 _KERNELS: dict = {}
+_MAKING = threading.Lock()
 
 
 def _shapes(leaves, batched: bool) -> tuple:
@@ -123,8 +125,8 @@ def advance(stepper, excitations, state, n, batched: bool, mesh=None):
     """(state, done) after at most `n` more loop steps of every cell: `engine`'s pass, through a
     kernel traced once for all batch sizes (see the module docstring). With a `mesh` (a 1-D
     `jax.sharding.Mesh`, axis "scenes") the cells are sharded over its devices
-    (`NamedSharding`), each device running the one-device kernel on its own block: the same
-    compiled code as without a mesh, so the same bits (a `shard_map` of it compiles an SPMD
+    (`NamedSharding`), each device running the one-device kernel on its own block: the code of
+    a batch of the block's size, so the bits of that batch (a `shard_map` of it compiles an SPMD
     program whose code moved the last bit of 1 cell in 60); no device waits on another within the
     pass. The batch size must be a multiple of the mesh's size."""
     dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
@@ -135,11 +137,12 @@ def advance(stepper, excitations, state, n, batched: bool, mesh=None):
     n = jnp.asarray(n)
     structure = (batched, tree_s, tree_e, tree_c, _static(static_s), _static(static_e),
                  _shapes(leaves_s, batched), _shapes(leaves_e, True), _shapes(leaves_c, True), str(n.dtype))
-    kernel = _KERNELS.get((structure, mesh))
-    if kernel is None:
-        exported = _advance_kernel(structure, (leaves_s, leaves_e, leaves_c, n), (static_s, static_e))
-        kernel = _KERNELS[(structure, mesh)] = jax.jit(exported.call) if mesh is None else _sharded(exported, mesh, batched, leaves_s,
-                                                                                                       leaves_e, leaves_c)
+    with _MAKING:  # chunks run from several threads (`sweep._run_here`): one trace per structure
+        kernel = _KERNELS.get((structure, mesh))
+        if kernel is None:
+            exported = _advance_kernel(structure, (leaves_s, leaves_e, leaves_c, n), (static_s, static_e))
+            kernel = _KERNELS[(structure, mesh)] = jax.jit(exported.call) if mesh is None else _sharded(exported, mesh, batched, leaves_s,
+                                                                                                           leaves_e, leaves_c)
     if mesh is not None:
         cells = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("scenes"))
         leaves_s = jax.device_put(leaves_s, cells) if batched else leaves_s

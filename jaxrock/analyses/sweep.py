@@ -25,7 +25,7 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ALL_COMPLETED, FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Callable, Iterable
 
 import numpy as np
@@ -426,23 +426,7 @@ def _run(sweep, store, client, devices, progress, on_chunk):
 
     try:
         if client is None:
-            # a chunk is written by a second thread while the next one runs; leaving the block (an
-            # interruption, an error) waits for the write in progress, so a finished chunk is kept
-            with ThreadPoolExecutor(max_workers=1) as writer:
-                pending = None
-                for k in todo:
-                    interrupt.stop_point()
-                    out = run_chunk(sweep, k, devices)
-                    if pending is not None:
-                        finished_chunk(pending.result())
-                        pending = None
-                    if store is None:
-                        held[k] = out
-                        finished_chunk(k)
-                    else:
-                        pending = writer.submit(lambda k, out: zstore.write_chunk(store, sweep, k, out) or k, k, out)
-                if pending is not None:
-                    finished_chunk(pending.result())
+            _run_here(sweep, todo, store, held, devices, finished_chunk)
         else:
             _run_on_cluster(client, os.path.abspath(store), sweep, list(todo), finished_chunk)  # workers may start elsewhere
     finally:
@@ -450,6 +434,58 @@ def _run(sweep, store, client, devices, progress, on_chunk):
     if store is None:
         return zstore.in_memory(sweep, held)
     return zstore.load(store)
+
+
+def _run_here(sweep: Sweep, todo: Iterable[int], store, held: dict, devices, finished_chunk: Callable[[int], None]) -> None:
+    """The chunks of `todo` in this process, one chunk per device at a time: each runs on one
+    device from a thread of its own (host devices dispatched from one thread run one after the
+    other: a chunk per core is the way to use a CPU's cores), and is written by one more thread
+    while the next ones run. Every chunk runs as it would alone on one device: the same bits. An
+    interruption (`interrupt.stop_point`, checked before each chunk starts) or an error waits for
+    the chunks in flight and their writes, so a finished chunk is kept."""
+    import jax
+
+    from .. import interrupt
+    from ..io import store as zstore
+
+    free = list(jax.local_devices() if devices is None else devices)[::-1]
+    in_flight = {}  # a chunk's future → (k, its device)
+    writes = []
+
+    def collect(block: bool):
+        done, _ = wait(in_flight, return_when=FIRST_COMPLETED if block else ALL_COMPLETED)
+        failed = None
+        for fut in sorted(done, key=lambda f: in_flight[f][0]):
+            k, dev = in_flight.pop(fut)
+            free.append(dev)
+            if fut.exception() is not None:  # the others are kept before it is raised
+                failed = failed or fut.exception()
+            elif store is None:
+                held[k] = fut.result()
+                finished_chunk(k)
+            else:
+                writes.append(writer.submit(lambda k, out: zstore.write_chunk(store, sweep, k, out) or k, k, fut.result()))
+        for w in [w for w in writes if w.done()]:
+            writes.remove(w)
+            finished_chunk(w.result())
+        if failed is not None:
+            raise failed
+
+    with ThreadPoolExecutor(max_workers=1) as writer, ThreadPoolExecutor(max_workers=len(free)) as runners:
+        try:
+            for k in todo:
+                interrupt.stop_point()
+                if not free:
+                    collect(block=True)
+                dev = free.pop()
+                in_flight[runners.submit(run_chunk, sweep, k, [dev])] = (k, dev)
+        finally:
+            try:
+                if in_flight:
+                    collect(block=False)
+            finally:
+                for w in writes:
+                    finished_chunk(w.result())
 
 
 def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], finished_chunk: Callable[[int], None]) -> None:

@@ -328,7 +328,8 @@ def sweep(
     store: Path = typer.Option(Path("out/sweep.zarr"), help="the Zarr store (xarray.open_zarr reads it); a rerun of the same "
                                "command resumes it, one with other parameters is refused"),
     chunk_size: int = typer.Option(1024, help="most scenes per chunk: one vmapped batch, one Zarr chunk, one Dask task (1024: the fastest of 256, 1024, 4096 on the rigid model, benchmarks/bench_sweep.py)"),
-    devices: Optional[int] = typer.Option(None, help="shard each chunk over this many local devices (default: all)"),
+    devices: Optional[int] = typer.Option(None, help="run chunks on this many local devices, one chunk per device at a time "
+                                          "(default: all; on a CPU, one device per core)"),
     scheduler: Optional[str] = typer.Option(None, help="address of a running Dask scheduler (tcp://host:8786): each chunk is a "
                                             "task of its workers, which write into --store (a folder they all see); needs "
                                             "jaxrock[distributed]"),
@@ -336,8 +337,8 @@ def sweep(
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h or 2 GB"),
 ):
     """Every scene of a product of axes (pulses or records × sizes × slendernesses × model
-    parameters) into a chunked Zarr store: resumable, sharded over local devices, or spread over a
-    Dask cluster."""
+    parameters) into a chunked Zarr store: resumable, a chunk per local device at a time, or spread
+    over a Dask cluster."""
     from .._validate import JaxrockInputError, check_writable
     from ..scene import takes
 

@@ -22,6 +22,9 @@ class _OneLineErrors(typer.core.TyperGroup):
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         import sys
 
+        from ..runtime import use_cpu_cores
+
+        use_cpu_cores()  # before JAX starts: a sweep's chunks run one per core
         try:
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except typer.Abort:
