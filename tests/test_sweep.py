@@ -202,6 +202,11 @@ _SHARDED = textwrap.dedent("""
         for name in ("max_theta", "t_uplift", "t_overturn", "overturned", "uplifted", "n_impacts", "status"):
             assert same(one[name].values, four[name].values), (sw.model, name)
         assert (one.status.values == 0).all() and one.overturned.any()
+    # a record suite: its sweep's chunks (a record each) over the devices, then its bisection
+    sw = Sweep.make("rigid", records=jr.read_records(["builtin"])[:3], height=[1.0, 4.0], tan_alpha=0.2, scale=np.linspace(0.5, 2.5, 5))
+    used.clear()
+    one, four = (jr.least_overturning_scale(sw, refine=3, progress=False, devices=d) for d in (jax.local_devices()[:1], None))
+    assert len(used) == 3 and same(one.least_scale.values, four.least_scale.values) and same(one.max_theta.values, four.max_theta.values)
     # a batch's passes sharded over the four devices (`NamedSharding`, explicit devices): each device
     # runs its block at a quarter of the batch size, so the last bits may move as in another batch
     # (`run_batch`: 1e-10); here one cell by one ulp

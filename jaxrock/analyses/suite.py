@@ -5,8 +5,9 @@ figure 10, for a suite), refined by a vmapped bisection.
 quantities × a `scale` axis, resumable in a store), takes in each cell (record, size, slenderness,
 ...) the first factor of the sweep that overturns the column, and bisects between it and the factor
 before it (0 below the first): each round runs every cell of a record in one vmapped batch (models
-per scene), so a suite costs `refine` batches per record after its sweep. The bracket [low, least]
-is reported with its width.
+per scene), so a suite costs `refine` batches per record after its sweep (records grouped into
+batches of at least `BISECTION_CELLS` cells, the groups one per local device at a time, as a
+sweep's chunks). The bracket [low, least] is reported with its width.
 
 Overturning is not monotone in the factor (a rocking column that overturns at s may survive a
 larger one): the least factor found is the least within its bracket; an overturning window
@@ -24,7 +25,7 @@ import numpy as np
 
 from .._validate import JaxrockInputError, check_grid
 from ..scene import MAX_REFINE
-from .sweep import Sweep, run_sweep, run_values
+from .sweep import Sweep, on_devices, run_sweep, run_values
 
 BISECTION_CELLS = 256  # the least batch of a bisection round (records grouped to reach it)
 
@@ -65,34 +66,32 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     cell_dims = sweep.dims[1:-1]
     cells = sweep.values_at(tuple(slice(0, len(sweep.axes[d])) for d in cell_dims), cell_dims)  # every column, C order
     kept = _Bisections(store, ds.attrs["made_by"], int(refine), hi, lo, worst)
-    n_cells = int(np.prod(has.shape[1:]))
-    # records bisected together, in groups of at least BISECTION_CELLS cells: a batch's lanes move in
-    # lockstep, and a record's few cells alone would leave most of each loop step's work undone
-    groups, group = [], []
-    for r in range(len(sweep.records)):
-        if has[r].any() and not kept.done[r]:
-            group.append(r)
-            if len(group) * n_cells >= BISECTION_CELLS:
-                groups, group = groups + [group], []
-    groups += [group] if group else []
+    groups = _groups([r for r in range(len(sweep.records)) if has[r].any() and not kept.done[r]], has)
+
+    def bisect(group, devs):
+        todo = has[group].reshape(len(group), -1)
+        h, l, w = (a[group].reshape(len(group), -1).copy() for a in (hi, lo, worst))
+        v = {name: np.broadcast_to(x.ravel(), todo.shape)[todo] for name, x in cells.items()}
+        v["record"] = np.broadcast_to(np.asarray(group)[:, None], todo.shape)[todo]
+        for _ in range(int(refine)):
+            interrupt.stop_point()
+            mid = 0.5 * (l[todo] + h[todo])
+            out = run_values(sweep, v | {"scale": mid}, devs)
+            yes = out["overturned"].astype(bool)
+            h[todo] = np.where(yes, mid, h[todo])
+            l[todo] = np.where(yes, l[todo], mid)
+            w[todo] = np.maximum(w[todo], out["status"])
+            bar.update()
+        return h, l, w
+
+    def done(group, hlw):
+        h, l, w = hlw
+        for i, r in enumerate(group):
+            hi[r], lo[r], worst[r] = h[i].reshape(hi[r].shape), l[i].reshape(lo[r].shape), w[i].reshape(worst[r].shape)
+            kept.finished(r)
+
     with tqdm(total=len(groups) * int(refine), desc="bisection", unit="batch", disable=not progress) as bar:
-        for group in groups:
-            todo = has[group].reshape(len(group), -1)
-            h, l, w = (a[group].reshape(len(group), -1).copy() for a in (hi, lo, worst))
-            v = {name: np.broadcast_to(x.ravel(), todo.shape)[todo] for name, x in cells.items()}
-            v["record"] = np.broadcast_to(np.asarray(group)[:, None], todo.shape)[todo]
-            for _ in range(int(refine)):
-                interrupt.stop_point()
-                mid = 0.5 * (l[todo] + h[todo])
-                out = run_values(sweep, v | {"scale": mid}, devices)
-                yes = out["overturned"].astype(bool)
-                h[todo] = np.where(yes, mid, h[todo])
-                l[todo] = np.where(yes, l[todo], mid)
-                w[todo] = np.maximum(w[todo], out["status"])
-                bar.update()
-            for i, r in enumerate(group):
-                hi[r], lo[r], worst[r] = h[i].reshape(hi[r].shape), l[i].reshape(lo[r].shape), w[i].reshape(worst[r].shape)
-                kept.finished(r)
+        on_devices(bisect, groups, devices, done)
     dims = sweep.dims[:-1]
     ds["least_scale"] = (dims, hi, {"long_name": "least scale factor that overturns (inf: none of the sweep)", "units": "1"})
     ds["bracket_low"] = (dims, lo, {"long_name": "largest scale factor below least_scale known not to overturn", "units": "1"})
@@ -102,6 +101,18 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     ds["worst_status"] = (dims, worst.astype(np.int32), {"long_name": "largest jaxrock.Status code of the cell's runs (0: all ok)"})
     ds.attrs["refine"] = int(refine)
     return ds
+
+
+def _groups(records: list[int], has) -> list[list[int]]:
+    """The records bisected together (a group's rounds are one batch each), in groups of at least
+    BISECTION_CELLS cells: a batch's lanes move in lockstep, and a record's few cells alone would
+    leave most of each loop step's work undone."""
+    groups, group = [], []
+    for r in records:
+        group.append(r)
+        if len(group) * has[r].size >= BISECTION_CELLS:
+            groups, group = groups + [group], []
+    return groups + ([group] if group else [])
 
 
 class _Bisections:

@@ -436,56 +436,70 @@ def _run(sweep, store, client, devices, progress, on_chunk):
     return zstore.load(store)
 
 
-def _run_here(sweep: Sweep, todo: Iterable[int], store, held: dict, devices, finished_chunk: Callable[[int], None]) -> None:
-    """The chunks of `todo` in this process, one chunk per device at a time: each runs on one
-    device from a thread of its own (host devices dispatched from one thread run one after the
-    other: a chunk per core is the way to use a CPU's cores), and is written by one more thread
-    while the next ones run. Every chunk runs as it would alone on one device: the same bits. An
-    interruption (`interrupt.stop_point`, checked before each chunk starts) or an error waits for
-    the chunks in flight and their writes, so a finished chunk is kept."""
+def on_devices(fn: Callable, items: Iterable, devices, done: Callable) -> None:
+    """`fn(item, [device])` for each of `items`, one item per local device at a time (`devices`;
+    None: every local one), each from a thread of its own: host devices dispatched from one thread
+    run one after the other, so a CPU's cores (one device each, `jaxrock.use_cpu_cores`) are used
+    by running an item on each. `done(item, result)` runs in the calling thread as each finishes.
+    `interrupt.stop_point()` is checked before each item starts; leaving (an interruption, an
+    error) waits for the items in flight and hands the finished ones to `done` first."""
     import jax
 
     from .. import interrupt
-    from ..io import store as zstore
 
     free = list(jax.local_devices() if devices is None else devices)[::-1]
-    in_flight = {}  # a chunk's future → (k, its device)
-    writes = []
+    in_flight = {}  # future → (position, item, device)
 
     def collect(block: bool):
-        done, _ = wait(in_flight, return_when=FIRST_COMPLETED if block else ALL_COMPLETED)
+        finished, _ = wait(in_flight, return_when=FIRST_COMPLETED if block else ALL_COMPLETED)
         failed = None
-        for fut in sorted(done, key=lambda f: in_flight[f][0]):
-            k, dev = in_flight.pop(fut)
+        for fut in sorted(finished, key=lambda f: in_flight[f][0]):
+            _, item, dev = in_flight.pop(fut)
             free.append(dev)
             if fut.exception() is not None:  # the others are kept before it is raised
                 failed = failed or fut.exception()
-            elif store is None:
-                held[k] = fut.result()
-                finished_chunk(k)
             else:
-                writes.append(writer.submit(lambda k, out: zstore.write_chunk(store, sweep, k, out) or k, k, fut.result()))
-        for w in [w for w in writes if w.done()]:
-            writes.remove(w)
-            finished_chunk(w.result())
+                done(item, fut.result())
         if failed is not None:
             raise failed
 
-    with ThreadPoolExecutor(max_workers=1) as writer, ThreadPoolExecutor(max_workers=len(free)) as runners:
+    with ThreadPoolExecutor(max_workers=len(free)) as pool:
         try:
-            for k in todo:
+            for i, item in enumerate(items):
                 interrupt.stop_point()
                 if not free:
                     collect(block=True)
                 dev = free.pop()
-                in_flight[runners.submit(run_chunk, sweep, k, [dev])] = (k, dev)
+                in_flight[pool.submit(fn, item, [dev])] = (i, item, dev)
         finally:
-            try:
-                if in_flight:
-                    collect(block=False)
-            finally:
-                for w in writes:
-                    finished_chunk(w.result())
+            if in_flight:
+                collect(block=False)
+
+
+def _run_here(sweep: Sweep, todo: Iterable[int], store, held: dict, devices, finished_chunk: Callable[[int], None]) -> None:
+    """The chunks of `todo` in this process, one per device at a time (`on_devices`), each written
+    by one more thread while the next ones run. Every chunk runs as it would alone on one device:
+    the same bits. Leaving waits for the writes in progress, so a finished chunk is kept."""
+    from ..io import store as zstore
+
+    writes = []
+
+    def done(k, out):
+        if store is None:
+            held[k] = out
+            finished_chunk(k)
+        else:
+            writes.append(writer.submit(lambda k, out: zstore.write_chunk(store, sweep, k, out) or k, k, out))
+        for w in [w for w in writes if w.done()]:
+            writes.remove(w)
+            finished_chunk(w.result())
+
+    with ThreadPoolExecutor(max_workers=1) as writer:
+        try:
+            on_devices(lambda k, devs: run_chunk(sweep, k, devs), todo, devices, done)
+        finally:
+            for w in writes:
+                finished_chunk(w.result())
 
 
 def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], finished_chunk: Callable[[int], None]) -> None:
