@@ -13,7 +13,10 @@ low-passed noise under a rise-and-decay envelope, peak 0.35 g), eleven distinct 
 overturning factor of the sweep, bisected `refine` times against the one before it).
 
 - jaxrock: the first call (with compilation, cache off, the number of XLA compilations counted)
-  and the best of 2 warm calls; µs per record sample per run.
+  and the best of 2 warm calls; µs per record sample per run. On every usable core, as the command
+  line runs (`jaxrock.use_cpu_cores`: one device per core, a sweep's chunks one per device;
+  `--cores=1`: one); the peers' loops run in one process (a pool of processes would at best divide
+  their times by the cores: that ratio is printed too).
 - SciPy at its tuned setting of bench_rigid (DOP853 rtol 1e-6: max error in θ/α ≤ 1e-6 on pulses).
 - Error: max |θ|/α′ of jaxrock's default and of the SciPy loop at rtol 1e-6 against SciPy at
   rtol 1e-12, on the cells the reference determines (SciPy at 1e-10 and 1e-12 within 1e-8), three
@@ -41,17 +44,21 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import sys
 import time
 from pathlib import Path
 
 os.environ.setdefault("JAXROCK_CACHE_DIR", "off")  # the first call's compilation is part of what is measured
 
+import jaxrock as jr  # noqa: E402
+
+CORES = next((int(a.split("=")[1]) for a in sys.argv if a.startswith("--cores=")), None)
+jr.use_cpu_cores(CORES)  # as the command line does: one device per core, a sweep's chunks one per device
+
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
-
-import jaxrock as jr  # noqa: E402
 from jaxrock.analyses.engine import run_batch  # noqa: E402
 from jaxrock.numerics import scipy_rigid as sr  # noqa: E402
 
@@ -215,6 +222,9 @@ def spring_section(records, heights, tan_a, scales, args):
     for name in peers:
         us = 1e6 * secs[name] / peer_samples
         out(f"{name + ' (build included)':<44}{us:14.2f}{us / us_jr:10.1f}x{err[name]:22.1e}{verdicts[name]:>9d} of {determined}")
+    n_dev = len(jax.local_devices())
+    if n_dev > 1:
+        out(f"(jaxrock on {n_dev} devices, one per core; OpenSees in {n_dev} processes would at best divide its times by {n_dev})")
 
 
 def rigid_section(records, heights, tan_a, scales, args):
@@ -242,16 +252,19 @@ def rigid_section(records, heights, tan_a, scales, args):
             out(f"{rec.name[:19]:<20}{rec.n:8d}{h:5g}{mine:15.6g}{least:13.6g}{'yes' if agree else 'no':>14}")
     scipy_s = time.perf_counter() - t0
     cells = len(records) * len(heights)
-    cells = reference_cells(records, heights, tan_a, ds, scales)
-    tried = sum(len(c[2]) for c in cells)
-    err_jr, determined = max_error(cells, jaxrock_runs())
-    err_sp, _ = max_error(cells, lambda rec, block, picks: [scipy_over(block, rec, s, 1e-6).max_theta for s in picks])
+    ref_cells = reference_cells(records, heights, tan_a, ds, scales)
+    tried = sum(len(c[2]) for c in ref_cells)
+    err_jr, determined = max_error(ref_cells, jaxrock_runs())
+    err_sp, _ = max_error(ref_cells, lambda rec, block, picks: [scipy_over(block, rec, s, 1e-6).max_theta for s in picks])
     out()
     out(f"same least factor (bit for bit: the same brackets): {same} of {cells} cells")
     out(line)
     out(f"SciPy DOP853 rtol 1e-6: {runs_sp} record runs in {scipy_s:.1f} s ({1e3 * scipy_s / runs_sp:.0f} ms/run)")
+    n_dev = len(jax.local_devices())
     out(f"speed-up per run, warm: {(scipy_s / runs_sp) / (warm / runs_jr):.0f}x; "
-        f"whole suite with jaxrock's compilation: {scipy_s / first:.1f}x")
+        f"whole suite with jaxrock's compilation: {scipy_s / first:.1f}x"
+        + (f"; against SciPy in {n_dev} processes at best (its time / {n_dev}): {(scipy_s / n_dev / runs_sp) / (warm / runs_jr):.0f}x warm, "
+           f"{scipy_s / n_dev / first:.1f}x cold" if n_dev > 1 else ""))
     out(f"max |θ|/α′ error against SciPy rtol 1e-12, {determined} determined cells of {tried}: "
         f"jaxrock default {err_jr:.1e}, SciPy rtol 1e-6 {err_sp:.1e}")
 
@@ -283,6 +296,8 @@ def main():
     ap.add_argument("--jaxrock-only", action="store_true", help="no peer, no errors, printed only (to time an older jaxrock)")
     ap.add_argument("--models", default="rigid,spring", help="comma-separated: rigid (vs SciPy), spring (quasi-rigid SM vs OpenSeesPy)")
     ap.add_argument("--n-opensees", type=int, default=12, help="SM runs drawn from the sweep for OpenSeesPy")
+    ap.add_argument("--cores", type=int, default=None, help="CPU devices (--cores=N; default: every usable core, as the "
+                    "command line); 1: one device, one core's worth")
     ap.add_argument("--rtols", type=lambda v: [float(x) for x in v.split(",")], default=None,
                     help="comma-separated: only the RM's tolerance study at these rtols (the first picks the error cells), "
                          "written to bench_suite_rtol.txt")
@@ -296,7 +311,8 @@ def main():
     out(f"# bench_suite: {len(records)} records of {len(set(samples.values()))} distinct lengths "
         f"({min(samples.values())}–{max(samples.values())} samples) × {len(heights)} sizes, tanα = {tan_a}, factors 0.25:4:16, "
         f"refine {args.refine}; {', '.join(models)}")
-    out(f"# machine: {platform.machine()} {os.cpu_count()} CPUs; jax {jax.__version__}; jaxrock compilation cache off")
+    out(f"# machine: {platform.machine()} {os.cpu_count()} CPUs; jax {jax.__version__}; jaxrock compilation cache off; "
+        f"{len(jax.local_devices())} {jax.local_devices()[0].platform} device(s) (`jaxrock.use_cpu_cores`); the peers run one process")
     if args.rtols:
         rtol_study(records, heights, tan_a, scales, args)
         if not args.quick:

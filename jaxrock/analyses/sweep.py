@@ -448,6 +448,11 @@ def on_devices(fn: Callable, items: Iterable, devices, done: Callable) -> None:
     from .. import interrupt
 
     free = list(jax.local_devices() if devices is None else devices)[::-1]
+    if len(free) == 1:  # one device: in this thread
+        for item in items:
+            interrupt.stop_point()
+            done(item, fn(item, free))
+        return
     in_flight = {}  # future → (position, item, device)
 
     def collect(block: bool):
