@@ -11,7 +11,7 @@ it, then the best of three warm runs is timed, each into a fresh store where a s
 (times on this machine wander 10-20 % over minutes).
 
 - devices: 1, 2, 4 forced host devices (`XLA_FLAGS=--xla_force_host_platform_device_count=N`),
-  chunks sharded over them (`NamedSharding`), in memory;
+  a chunk per device at a time (`sweep.on_devices`), in memory;
 - workers: a Dask `LocalCluster` of 1 or 2 worker processes (1 thread each) writing one Zarr store,
   against the same sweep in one process writing its store;
 - chunk size: 256, 1024, 4096 scenes per chunk, one process, one device, writing the store; the

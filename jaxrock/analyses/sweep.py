@@ -7,13 +7,13 @@ and the spring's smoothing θs/α′. The product of its axes (in the order of `
 and model axes outside, excitation axes inside) is split into `chunks` of at most `chunk_size`
 scenes, each a hyper-rectangle of the grid (every record in its own chunks: records differ in
 length). `run_chunk` runs one chunk through the batch engine (`jaxrock.analyses.engine`: the
-compaction of the spectra; its scenes sharded over the host's devices when there are several) and
-returns its summary outputs; a chunk reads nothing but the sweep, so chunks run in any order, in
+compaction of the spectra, on the devices it is given) and returns its summary outputs; a chunk reads nothing but the sweep, so chunks run in any order, in
 any process, with the same bits.
 
 `run_sweep` runs the chunks not yet in the store (`jaxrock.io.store`: xarray on Zarr, one Zarr
-chunk per sweep chunk) in this process, or as tasks of a Dask cluster (`client`), with a progress
-bar; a rerun after an interruption runs only what is missing.
+chunk per sweep chunk) in this process, one chunk per local device at a time (`on_devices`; on a CPU,
+one device per core with `jaxrock.use_cpu_cores`), or as tasks of a Dask cluster (`client`), with a
+progress bar; a rerun after an interruption runs only what is missing.
 """
 
 from __future__ import annotations
