@@ -44,21 +44,17 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
 os.environ.setdefault("JAXROCK_CACHE_DIR", "off")  # the first call's compilation is part of what is measured
 
-import jaxrock as jr  # noqa: E402
-
-CORES = next((int(a.split("=")[1]) for a in sys.argv if a.startswith("--cores=")), None)
-jr.use_cpu_cores(CORES)  # as the command line does: one device per core, a sweep's chunks one per device
-
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
+
+import jaxrock as jr  # noqa: E402
 from jaxrock.analyses.engine import run_batch  # noqa: E402
 from jaxrock.numerics import scipy_rigid as sr  # noqa: E402
 
@@ -169,10 +165,16 @@ def runs_and_samples(ds, records, n_sizes, n_scales, refine):
     return int(per_record.sum()), int(sum(n * rec.n for n, rec in zip(per_record, records)))
 
 
-def jaxrock_line(runs, samples, first, compiled, warm):
-    return (f"jaxrock: {runs} record runs, {samples} record samples in all; first call {first:.1f} s "
+def jaxrock_suite(kind, records, heights, tan_a, scales, refine, warm_calls, integrator=None):
+    """jaxrock's suite of model `kind`: (the result, runs, µs per sample per run warm, warm seconds,
+    first call's seconds, the line that reports it)."""
+    sweep = jr.Sweep.make(kind, records=records, height=heights, tan_alpha=tan_a, scale=scales, integrator=integrator)
+    ds, first, compiled, warm = suite_time(sweep, refine, warm_calls)
+    runs, samples = runs_and_samples(ds, records, len(heights), len(scales), refine)
+    line = (f"jaxrock: {runs} record runs, {samples} record samples in all; first call {first:.1f} s "
             f"({compiled} XLA compilations), warm {warm:.2f} s ({1e3 * warm / runs:.2f} ms/run, "
             f"{1e6 * warm / samples:.2f} µs per sample per run)")
+    return ds, runs, 1e6 * warm / samples, warm, first, line
 
 
 def spring_section(records, heights, tan_a, scales, args):
@@ -181,11 +183,8 @@ def spring_section(records, heights, tan_a, scales, args):
 
     out()
     out("## quasi-rigid SM (the default: Tsit5 rtol = atol = 1e-10) against OpenSeesPy")
-    sweep = jr.Sweep.make("spring", records=records, height=heights, tan_alpha=tan_a, scale=scales)
-    ds, first, compiled, warm = suite_time(sweep, args.refine, 1)
-    runs, samples = runs_and_samples(ds, records, len(heights), len(scales), args.refine)
-    us_jr = 1e6 * warm / samples
-    out(jaxrock_line(runs, samples, first, compiled, warm))
+    ds, _, us_jr, _, _, line = jaxrock_suite("spring", records, heights, tan_a, scales, args.refine, 1)
+    out(line)
     rng = np.random.default_rng(0)
     picks = [(int(rng.integers(len(records))), int(rng.integers(len(heights))), float(rng.choice(scales))) for _ in range(args.n_opensees)]
     tight = {tol: jr.SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=4_000_000) for tol in (1e-11, 1e-12)}
@@ -231,10 +230,7 @@ def rigid_section(records, heights, tan_a, scales, args):
     """The RM: jaxrock's suite against the SciPy loop's same search, and both against a tight reference."""
     out()
     out("## RM against the SciPy event loop")
-    sweep = jr.Sweep.make("rigid", records=records, height=heights, tan_alpha=tan_a, scale=scales)
-    ds, first, compiled, warm = suite_time(sweep, args.refine, 2)
-    runs_jr, samples_jr = runs_and_samples(ds, records, len(heights), len(scales), args.refine)
-    line = jaxrock_line(runs_jr, samples_jr, first, compiled, warm)
+    ds, runs_jr, _, warm, first, line = jaxrock_suite("rigid", records, heights, tan_a, scales, args.refine, 2)
     if args.jaxrock_only:
         out(line)
         return
@@ -279,14 +275,12 @@ def rtol_study(records, heights, tan_a, scales, args):
     cells = base = None
     for rtol in args.rtols:
         integ = jr.EventIntegrator(rtol=rtol, atol=rtol * 1e-2)
-        sweep = jr.Sweep.make("rigid", records=records, height=heights, tan_alpha=tan_a, scale=scales, integrator=integ)
-        ds, first, _, warm = suite_time(sweep, args.refine, 2)
+        ds, _, us, warm, first, _ = jaxrock_suite("rigid", records, heights, tan_a, scales, args.refine, 2, integ)
         if cells is None:
             cells, base = reference_cells(records, heights, tan_a, ds, scales), ds.least_scale.values
         err, determined = max_error(cells, jaxrock_runs(integ))
-        runs, samples = runs_and_samples(ds, records, len(heights), len(scales), args.refine)
         same = int(np.sum(ds.least_scale.values == base))
-        out(f"{rtol:8.0e}{first:9.1f}{warm:8.2f}{1e6 * warm / samples:15.2f}{err:13.1e}{determined:12d}{same:>7d} of {base.size}")
+        out(f"{rtol:8.0e}{first:9.1f}{warm:8.2f}{us:15.2f}{err:13.1e}{determined:12d}{same:>7d} of {base.size}")
 
 
 def main():
@@ -296,12 +290,13 @@ def main():
     ap.add_argument("--jaxrock-only", action="store_true", help="no peer, no errors, printed only (to time an older jaxrock)")
     ap.add_argument("--models", default="rigid,spring", help="comma-separated: rigid (vs SciPy), spring (quasi-rigid SM vs OpenSeesPy)")
     ap.add_argument("--n-opensees", type=int, default=12, help="SM runs drawn from the sweep for OpenSeesPy")
-    ap.add_argument("--cores", type=int, default=None, help="CPU devices (--cores=N; default: every usable core, as the "
+    ap.add_argument("--cores", type=int, default=None, help="CPU devices (default: every usable core, as the "
                     "command line); 1: one device, one core's worth")
     ap.add_argument("--rtols", type=lambda v: [float(x) for x in v.split(",")], default=None,
                     help="comma-separated: only the RM's tolerance study at these rtols (the first picks the error cells), "
                          "written to bench_suite_rtol.txt")
     args = ap.parse_args()
+    jr.use_cpu_cores(args.cores)  # as the command line does (before JAX's first computation): a sweep's chunks one per core
     models = ["rigid"] if args.rtols else args.models.split(",")
     records = jr.read_records(["builtin"]) + [synthetic(*s) for s in SYNTHETIC]
     if args.quick:

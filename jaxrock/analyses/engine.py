@@ -8,7 +8,7 @@ finished cell's place goes to the next one. Else it is one vmapped solve. Every 
 scenes files and any sweep. With several local devices each pass is sharded over them
 (`kernels.advance`: a `NamedSharding` of the cells over a 1-D mesh, each device running the
 one-device kernel on its block: the last bits of a smaller batch). A CPU's devices (one per core,
-`jaxrock.use_cpu_cores`) serve a sweep's chunks instead, one chunk per device (`sweep._run_here`).
+`jaxrock.use_cpu_cores`) serve a sweep's chunks instead, one chunk per device (`sweep.on_devices`).
 
 Three calls, three sizes: `simulate` runs one scene; `run_batch` a batch in memory (one model for
 every excitation, or one per scene with `model_batched`); `run_scenes`

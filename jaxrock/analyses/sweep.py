@@ -404,7 +404,6 @@ def _run(sweep, store, client, devices, progress, on_chunk):
     """`run_sweep` with its store (if any) made and held."""
     from tqdm.auto import tqdm
 
-    from .. import interrupt
     from ..io import store as zstore
 
     done = set()
