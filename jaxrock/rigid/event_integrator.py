@@ -320,8 +320,13 @@ class RigidStepper(AbstractStepper):
         t_seg = jnp.where(is_rocking, self._segment_end(sc, c), c.t)
         dt_min = self._min_step(sc, c.t)
         h0, cap = self._flight_steps(sc, exc, c.t, c.theta, c.theta_dot, c.side)
-        term, event, controller = self._diffrax_parts(sc, exc, jnp.where(c.dt_next == 0, cap, exc.max_step))
-        t_win = jnp.minimum(t_seg, c.t + integ.chunk_steps * h_nom)
+        fresh_flight = c.dt_next == 0
+        term, event, controller = self._diffrax_parts(sc, exc, jnp.where(fresh_flight, cap, exc.max_step))
+        # A flight's first window spans at most 4·chunk_steps of its cap, i.e. 16 of its estimated
+        # durations: where the ground turns a hop into a rocking motion (|üg| rising through
+        # g tanα′ during a chatter), the hop's cap would hold every step of a window of
+        # chunk_steps·h_nom, thousands of steps (`max_steps`); the next window steps freely.
+        t_win = jnp.minimum(t_seg, c.t + integ.chunk_steps * jnp.where(fresh_flight, jnp.minimum(h_nom, 4 * cap), h_nom))
         dt0 = jnp.where(c.dt_next > 0, c.dt_next, h0)
         dt0 = jax.lax.stop_gradient(jnp.minimum(dt0, jnp.maximum(t_win - c.t, tiny)))
         saveat = diffrax.SaveAt(t1=True, dense=not summary_only)
