@@ -8,8 +8,11 @@ for ever (eight independent `jnp.linalg.inv` of 12 × 33 × 33 batches in one ji
 every time on 2 cores; the flexible spring model vmapped over 12–16 scenes hung in 3 of 24 fresh
 processes). Upstream removed that path in jax 0.11.1.
 
-Every routine here therefore calls LAPACK on one matrix at a time: batches, whether they come from
-leading dimensions or from `vmap`, run as a sequential loop (`jax.custom_batching.sequential_vmap`).
+Every routine here therefore calls LAPACK on one matrix at a time on the CPU backend: batches,
+whether they come from leading dimensions or from `vmap`, run as a sequential loop
+(`jax.custom_batching.sequential_vmap`). On other backends (a GPU's cuSOLVER/cuBLAS), where there
+is no such deadlock and a loop of single small solves would serialise the device, the batched call
+is kept (chosen when traced, by `jax.default_backend()`; the kept kernels are keyed by platform).
 That alone breaks reverse mode (a `custom_vmap` cannot be linearised), so each routine is a
 `jax.custom_jvp` whose tangent is written with matrix products of primal-only factors
 (d(A⁻¹) = −A⁻¹ dA A⁻¹, and likewise for solves and factorisations): `grad`, `jvp`, `vmap` and
@@ -35,12 +38,13 @@ __all__ = ["inv", "solve", "cholesky", "solve_triangular", "eigvalsh", "Sequenti
 
 
 def _one_at_a_time(fn, core_ndims: tuple[int, ...]):
-    """`fn` on single core arrays; leading dimensions and `vmap` become a sequential loop."""
+    """`fn` on single core arrays; leading dimensions and `vmap` become a sequential loop on the
+    CPU backend, a batched call elsewhere (module doc)."""
     seq = jax.custom_batching.sequential_vmap(fn)
 
     def apply(*args):
         lead = args[0].shape[: args[0].ndim - core_ndims[0]]
-        f = seq
+        f = seq if jax.default_backend() == "cpu" else fn
         for _ in lead:
             f = jax.vmap(f)
         return f(*args)

@@ -173,3 +173,34 @@ def test_stored_simulate_is_simulate(kind, monkeypatch, tmp_path):
     with pytest.raises(jr.JaxrockInputError, match="t1"):
         kernels.simulate(model, exc, t1=3.0)
     kernels._store.cache_clear()
+
+
+def test_a_kernel_kept_for_another_platform_is_exported_again(monkeypatch, tmp_path):
+    """After a GPU run, a `JAX_PLATFORMS=cpu` run in the same cache folder once loaded the GPU's
+    kernel ("exported for platforms ('cuda',) but it is used on ('cpu',)"). The kept kernels'
+    folder is named by the platform too, and a kernel file that holds another platform's code
+    (copied, or from before the key had the platform) is exported again and replaced, not called."""
+    from jax import export
+
+    from jaxrock.analyses import kernels
+
+    monkeypatch.setenv(cache.VARIABLE, str(tmp_path))
+    kernels._store.cache_clear()
+    here = kernels._store()
+    monkeypatch.setattr(export, "default_export_platform", lambda: "cuda")
+    kernels._store.cache_clear()
+    assert kernels._store() != here and kernels._store().parent == here.parent
+    monkeypatch.undo()
+    kernels._store.cache_clear()
+
+    fn = jax.jit(lambda x: 2.0 * jnp.sin(x))
+    spec = jax.ShapeDtypeStruct((3,), jnp.float64)
+    path = tmp_path / "k.jax"
+    path.write_bytes(bytes(kernels._EXPORT(fn, platforms=("cuda",))(spec).serialize()))
+    exported, _ = kernels._load_or_export(path, lambda: (kernels._EXPORT(fn)(spec), None))
+    assert exported.platforms == (export.default_export_platform(),)
+    x = jnp.arange(3.0)
+    assert bool(jnp.all(exported.call(x) == fn(x)))
+    assert export.deserialize(bytearray(path.read_bytes())).platforms == exported.platforms  # replaced
+    again, _ = kernels._load_or_export(path, lambda: pytest.fail("a kernel of this platform is read back, not exported"))
+    assert again.platforms == exported.platforms

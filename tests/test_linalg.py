@@ -137,3 +137,31 @@ def test_batched_inverse_over_leading_dims():
     a = jnp.stack([SPD, 2 * SPD + jnp.eye(N), SPD.T @ SPD])
     np.testing.assert_allclose(_linalg.inv(a), jnp.stack([jnp.linalg.inv(m) for m in a]), rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(jnp.einsum("kij,kjl->kil", _linalg.inv(a), a), jnp.broadcast_to(jnp.eye(N), a.shape), atol=1e-12)
+
+
+def _primitives(jaxpr) -> set[str]:
+    names = set()
+    for eqn in jaxpr.eqns:
+        names.add(eqn.primitive.name)
+        for param in eqn.params.values():
+            for sub in param if isinstance(param, (list, tuple)) else (param,):
+                inner = getattr(sub, "jaxpr", sub)
+                if hasattr(inner, "eqns"):
+                    names |= _primitives(inner)
+    return names
+
+
+@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_the_sequential_loop_only_on_the_cpu_backend(monkeypatch, name, backend):
+    """The loop of single LAPACK calls is XLA:CPU's deadlock workaround: traced for another backend
+    (here `jax.default_backend` says so; the small batch runs on this CPU either way) a batch is one
+    batched call, with the same values and derivatives."""
+    f, x, ref = CASES[name]
+    monkeypatch.setattr(jax, "default_backend", lambda: backend)
+    xs = jnp.stack([x, 1.5 * x, 2 * x])
+    prims = _primitives(jax.make_jaxpr(jax.vmap(f))(xs).jaxpr)
+    assert ("scan" in prims) == (backend == "cpu"), prims  # the loop over the batch
+    np.testing.assert_allclose(jax.vmap(f)(xs), jax.vmap(ref)(xs), rtol=1e-12, atol=1e-13)
+    loss = lambda x: jnp.sum(jnp.sin(f(x)))
+    np.testing.assert_allclose(jax.vmap(jax.grad(loss))(xs)[0], jax.grad(loss)(x), rtol=1e-12, atol=1e-14)

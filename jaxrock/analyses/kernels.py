@@ -14,8 +14,10 @@ user's own files are). The numbers are the jitted functions', bit for bit.
 
 An entry is keyed by the pass's structure (the stepper's and the excitation's types and static
 values, every array's dtype and shape but the batch axis) under a folder named by a digest of
-jaxrock's source and the versions of the libraries that trace it: a change to any is a new entry,
-never a stale one. A structure whose static values have no stable text (an object printed with its
+jaxrock's source, the versions of the libraries that trace it and the platform it is exported for
+(`cpu`, `cuda`, ...: one cache folder serves a GPU run and a `JAX_PLATFORMS=cpu` run alike): a change
+to any is a new entry, never a stale one; a kept kernel whose platforms lack this process's (a
+file copied between folders) is exported again and replaced, never called. A structure whose static values have no stable text (an object printed with its
 address) is traced once per process and not stored.
 """
 
@@ -56,7 +58,7 @@ def _store() -> Path | None:
         digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
     for name in _TRACED_BY:
         digest.update(f"{name}={metadata.version(name)}\0".encode())
-    digest.update(f"x64={jax.config.jax_enable_x64}".encode())
+    digest.update(f"x64={jax.config.jax_enable_x64}\0platform={export.default_export_platform()}".encode())
     return root / "kernels" / digest.hexdigest()[:24]
 
 
@@ -105,11 +107,13 @@ def _path(kind: str, structure) -> Path | None:
 
 def _load_or_export(path: Path | None, export_now, with_template: bool = False):
     """(exported kernel, its template or None) from `path` (the template from the file beside it),
-    else from `export_now()`, then stored there for the next process."""
+    else from `export_now()` (also where the kept one was exported for other platforms), then
+    stored there for the next process."""
     template_path = None if path is None else path.with_suffix(".pkl")
     if path is not None and path.exists() and (not with_template or template_path.exists()):
         exported = export.deserialize(bytearray(path.read_bytes()))
-        return exported, (pickle.loads(template_path.read_bytes()) if with_template else None)
+        if export.default_export_platform() in exported.platforms:
+            return exported, (pickle.loads(template_path.read_bytes()) if with_template else None)
     exported, template = export_now()
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
