@@ -56,6 +56,13 @@ class AbstractExcitation(eqx.Module):
     def step_ts(self):
         """Times where the excitation has kinks (steps are placed on them), or None."""
 
+    @property
+    def peak(self) -> Float[Array, ""] | None:
+        """max |üg| [m/s²], or None where unknown (the default). A batch runs its cells in the order of
+        their peak against the body's uplift acceleration (`jaxrock.run_batch`), so that cells that
+        rock alike share their lockstep passes."""
+        return None
+
     def step_ts_from(self, t, m: int):
         """The `step_ts` that a solve from `t` of at most `m` steps can reach (each step ends at the
         next one at the latest): a solve carries its `step_ts` through every step, so a record's
@@ -123,6 +130,10 @@ class AbstractRicker(AbstractExcitation):
     @property
     def max_step(self):
         return 0.5 / self.omega_p
+
+    @property
+    def peak(self):
+        return jnp.abs(self.a_p)  # max |f| = 1
 
     @property
     def step_ts(self):
@@ -235,6 +246,10 @@ class StillGround(AbstractExcitation):
         return jnp.asarray(jnp.inf)
 
     @property
+    def peak(self):
+        return jnp.zeros(())
+
+    @property
     def step_ts(self):
         return None
 
@@ -330,6 +345,10 @@ class Record(AbstractExcitation):
     @property
     def max_step(self):
         return self.dt
+
+    @property
+    def peak(self):
+        return jnp.abs(self.scale) * jnp.max(jnp.where(jnp.arange(self.n) < self.length, jnp.abs(self.acc), 0.0))
 
     @property
     def step_ts(self):

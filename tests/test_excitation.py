@@ -68,6 +68,20 @@ def test_pulse_peak_is_exactly_a_p(pulse):
     assert abs(peak - a_p) <= 1e-14 * a_p
     ts = jnp.linspace(exc.t_start, exc.t_end, 2_000_001)
     assert float(jnp.max(jnp.abs(exc(ts)))) <= a_p * (1 + 1e-15)
+    assert float(exc.peak) == a_p == float(type(exc)(-a_p, omega_p).peak)  # `peak`, any sign
+
+
+def test_record_peak_is_its_largest_sample_within_its_length_times_its_scale():
+    """`Record.peak` (the engine orders a batch's cells by it): max |üg| of the linear interpolant,
+    i.e. of its samples, scaled; a padded record's zeros and the samples past `length` are not
+    the record."""
+    acc = np.array([0.1, -0.7, 0.3, 0.2, 0.0])
+    rec = jr.Record(acc, 0.01, 2.0)
+    assert float(rec.peak) == 1.4
+    assert float(rec.padded(9).peak) == 1.4
+    short = jr.Record(np.array([0.1, -0.2, 0.3, -5.0]), 0.01, 1.0, length=3)
+    assert float(short.peak) == 0.3 == float(jnp.max(jnp.abs(short(jnp.linspace(0.0, 0.05, 501)))))
+    assert float(jr.StillGround().peak) == 0.0
 
 
 def flipped_ricker(a_p, omega_p):
