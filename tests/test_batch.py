@@ -286,3 +286,25 @@ def test_cells_run_in_passes_of_like_intensity_and_results_follow_their_cells(mo
     perm = rng.permutation(n)
     again = batch(perm)
     assert np.array_equal(again, given[:, perm], equal_nan=True)
+
+
+@pytest.mark.parametrize("kind", ["rigid", "spring"])
+def test_gathering_on_the_device_gives_the_bits_of_gathering_on_the_host(monkeypatch, kind):
+    """On an accelerator a batch's running cells are gathered and scattered on the device
+    (`engine.GATHER_ON_DEVICE`); on a CPU on the host. Forced on this CPU, the device path gives the
+    host path's results bit for bit, through passes of gathered cells (rigid) and refilled lanes
+    (the spring model's `Schedule.lanes`)."""
+    from jaxrock.analyses import engine
+
+    rng = np.random.default_rng(3)
+    n = 150 if kind == "rigid" else 70
+    block = jr.Block.from_slenderness(6.0, 0.2)
+    model = jr.RigidModel(block) if kind == "rigid" else scene_model("spring", block)
+    exc = jr.RickerPulse(jnp.asarray(rng.uniform(0.5, 6, n) * jr.G * 0.2), jnp.asarray(rng.uniform(1, 12, n) * float(block.p)))
+    monkeypatch.setitem(engine.MAX_PASS, "cpu", 64)
+    host = jr.run_batch(model, exc)
+    monkeypatch.setitem(engine.GATHER_ON_DEVICE, "cpu", True)
+    device = jr.run_batch(model, exc)
+    assert int(np.max(np.asarray(host.n_iterations))) > 8  # several passes
+    for a, b in zip(jax.tree_util.tree_leaves(host), jax.tree_util.tree_leaves(device)):
+        assert np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)

@@ -148,6 +148,19 @@ def mesh_of(devices=None):
     return jax.sharding.Mesh(np.asarray(devices), ("scenes",)) if len(devices) > 1 else None
 
 
+# Whether a platform's passes gather and scatter their cells on the device (the default) or on
+# the host (a CPU: the host is the device, and numpy's gathers of any size compile nothing).
+GATHER_ON_DEVICE = {"cpu": False}
+
+_take = jax.jit(lambda tree, i: jax.tree_util.tree_map(lambda x: x[i], tree))
+_put = jax.jit(lambda tree, sub, i: jax.tree_util.tree_map(lambda x, y: x.at[i].set(y), tree, sub), donate_argnums=0)
+
+
+def _put_host(x, idx, y):
+    x[idx] = y[: idx.size]
+    return x
+
+
 @eqx.filter_jit
 def _intensity(model, exc, batched):
     """Each cell's peak ground acceleration over its body's uplift acceleration (g tanα′)."""
@@ -181,13 +194,17 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh=None, 
     platform = (jax.devices()[0] if mesh is None else mesh.devices.flat[0]).platform
     most = MAX_PASS.get(platform, 2**62) * n_dev
     n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
-    # The state (and the batched inputs) live on the host between passes: gathers and scatters of
-    # changing sizes in numpy cost nothing, where in JAX each new size would compile.
-    tree_np = lambda t: jax.tree_util.tree_map(np.array, t)
+    # On a CPU the state (and the batched inputs) live on the host between passes: gathers and
+    # scatters of changing sizes in numpy cost nothing. On an accelerator they stay on the device
+    # (`GATHER_ON_DEVICE`), gathered and scattered there by the padded index (the ladder's sizes:
+    # a few small programs), so that only the done flags and the indices cross to the host.
+    on_device = mesh is None and GATHER_ON_DEVICE.get(platform, True)  # a mesh's shards: gathered on the host
+    keep = (lambda t: t) if on_device else (lambda t: jax.tree_util.tree_map(np.array, t))
     dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
     dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
-    dyn_e, dyn_s = tree_np(dyn_e), tree_np(dyn_s)
-    state, done = tree_np(_init(stepper, excitations, batched))
+    dyn_e, dyn_s = keep(dyn_e), keep(dyn_s)
+    state, done = _init(stepper, excitations, batched)
+    state, done = keep(state), np.array(done)
     started = np.zeros(n, dtype=bool)
     used, k = 0, 0
     order = np.arange(n) if order is None else order
@@ -205,17 +222,15 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh=None, 
         for lo in range(0, todo.size, size):
             idx = todo[lo : lo + size]
             padded = np.concatenate([idx, np.full(size - idx.size, idx[0])])
-            take = lambda t: jax.tree_util.tree_map(lambda x: x[padded], t)
+            take = (lambda t: _take(t, padded)) if on_device else (lambda t: jax.tree_util.tree_map(lambda x: x[padded], t))
             sub_s = eqx.combine(take(dyn_s), static_s) if batched else stepper
             sub_e = eqx.combine(take(dyn_e), static_e)
-            sub_c, sub_done = tree_np(kernels.advance(sub_s, sub_e, take(state), n_pass, batched, mesh))
-
-            def put(x, y):
-                x[idx] = y[: idx.size]
-                return x
-
-            state = jax.tree_util.tree_map(put, state, sub_c)
-            done[idx] = sub_done[: idx.size]
+            sub_c, sub_done = kernels.advance(sub_s, sub_e, take(state), n_pass, batched, mesh)
+            if on_device:  # the padding repeats idx[0], whose lanes computed the same values
+                state = _put(state, sub_c, padded)
+            else:
+                state = jax.tree_util.tree_map(lambda x, y: _put_host(x, idx, y), state, keep(sub_c))
+            done[idx] = np.asarray(sub_done)[: idx.size]
         used += n_pass
         k = min(k + 1, len(passes) - 1)
     return _finish(stepper, excitations, state, batched)
