@@ -1,13 +1,13 @@
 """Throughput on the workloads users run: ordered grids against random scene sets, batch sizes
 from 4096 to 65536 (and up to 2^20 where a GPU is lent), mixed sizes and slendernesses.
 
-    python benchmarks/bench_throughput.py [--sizes 4096,16384,65536] [--quick] [--out FILE]
+    python benchmarks/bench_throughput.py [--sizes 4096,16384,65536] [--repeat 3] [--quick] [--out FILE]
 
-Rows (warm µs per scene = the best of three more calls / scenes; first call = compilation included;
+Rows (warm µs per scene = the best of `--repeat` more calls / scenes; first call = compilation included;
 stored kernels off, `JAXROCK_CACHE_DIR=off`):
 - RM, 2h = 10 m, tanα = 0.2, symmetric Ricker pulse, a_p/(g tanα) ∈ [0.5, 10], ω_p/p ∈ [1, 15]:
   `overturning_spectrum` on the 64 × 64 grid; `run_batch` on the same 4096 grid cells; `run_batch` on
-  uniform random sets of each `--sizes`; a random set of mixed blocks (2h ∈ [2, 50] m, tanα ∈
+  uniform random sets of each `--sizes`; a random set (the least of `--sizes`, at most 4096) of mixed blocks (2h ∈ [2, 50] m, tanα ∈
   [0.1, 0.35], both pulse shapes, one model per scene).
 - Quasi-rigid SM (the same block, default integrator): 1024 random scenes; flexible SM (concrete,
   2h = 50 m, 2b = 5 m, 10 elements): 256 random scenes.
@@ -79,6 +79,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", default="4096,16384,65536", help="random RM set sizes (comma-separated)")
     ap.add_argument("--quick", action="store_true", help="small sizes: a smoke run of every row")
+    ap.add_argument("--repeat", type=int, default=3, help="warm calls per row, the best counts (default 3)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=None, help="results file (default: benchmarks/results/bench_throughput[_<platform>].txt)")
     args = ap.parse_args()
@@ -87,7 +88,7 @@ def main() -> None:
     n_q, n_f = (64, 16) if args.quick else (1024, 256)
     rng = np.random.default_rng(args.seed)
     dev = jax.devices()[0]
-    out("# bench_throughput: µs per scene by workload and batch size (warm = best of 3 calls after the first; first = with compilation)")
+    out(f"# bench_throughput: µs per scene by workload and batch size (warm = best of {args.repeat} calls after the first; first = with compilation)")
     out(f"# machine: {platform.machine()}, {jax.device_count()} {dev.platform} device(s) ({dev.device_kind}), "
         f"{os.cpu_count()} cores, jax {jax.__version__}, python {platform.python_version()}")
     out(f"{'workload':58s} {'scenes':>8s} {'first s':>9s} {'warm s':>9s} {'µs/scene':>10s} {'vs grid':>9s} {'not ok':>6s}")
@@ -95,33 +96,33 @@ def main() -> None:
     block = jr.Block.from_slenderness(10.0, 0.2)
     model = jr.RigidModel(block)
     wr, ar = np.linspace(1.0, 15.0, grid), np.linspace(0.5, 10.0, grid)
-    first, warm, spec = timed(lambda: jr.overturning_spectrum(model, omega_ratio=wr, accel_ratio=ar, progress=False))
+    first, warm, spec = timed(lambda: jr.overturning_spectrum(model, omega_ratio=wr, accel_ratio=ar, progress=False), args.repeat)
     row(f"RM overturning_spectrum {grid}x{grid} grid", grid * grid, first, warm, int(np.sum(np.asarray(spec.status) != 0)))
     W, A = np.meshgrid(wr, ar)
     cells = jr.RickerPulse(jnp.asarray(A.ravel() * G * 0.2), jnp.asarray(W.ravel() * float(block.p_r)))
-    first, warm, sol = timed(lambda: jr.run_batch(model, cells))
+    first, warm, sol = timed(lambda: jr.run_batch(model, cells), args.repeat)
     grid_us = row(f"RM run_batch, the {grid * grid} grid cells", grid * grid, first, warm, not_ok(sol))
     for n in sizes:
         exc = random_pulses(rng, n, block)
-        first, warm, sol = timed(lambda: jr.run_batch(model, exc))
+        first, warm, sol = timed(lambda: jr.run_batch(model, exc), args.repeat)
         row(f"RM run_batch, {n} random scenes", n, first, warm, not_ok(sol), grid_us)
 
     # mixed blocks and pulse shapes, one model per scene
-    n = sizes[0]
+    n = min(min(sizes), 4096)
     heights, tans = rng.uniform(2.0, 50.0, n), rng.uniform(0.1, 0.35, n)
     models = jax.vmap(lambda h, t: jr.RigidModel(jr.Block.from_slenderness(h, t)))(jnp.asarray(heights), jnp.asarray(tans))
     p = np.asarray(models.block.p_r)
     a, w = rng.uniform(0.5, 10.0, n) * G * tans, rng.uniform(1.0, 15.0, n) * p
     for cls in (jr.RickerPulse, jr.AntisymmetricRickerPulse):
         exc = cls(jnp.asarray(a), jnp.asarray(w))
-        first, warm, sol = timed(lambda: jr.run_batch(models, exc, model_batched=True))
+        first, warm, sol = timed(lambda: jr.run_batch(models, exc, model_batched=True), args.repeat)
         row(f"RM run_batch, {n} random blocks, {cls.__name__}", n, first, warm, not_ok(sol), grid_us)
 
     # spring models
     for name, sm, n in (("quasi-rigid SM", SpringModel(block), n_q),
                         ("flexible SM (10 elements)", SpringModel(jr.Block.from_size(50.0, 5.0), Column.concrete(), n_elements=10), n_f)):
         exc = random_pulses(rng, n, sm.block)
-        first, warm, sol = timed(lambda: jr.run_batch(sm, exc))
+        first, warm, sol = timed(lambda: jr.run_batch(sm, exc), args.repeat)
         row(f"{name}, {n} random scenes", n, first, warm, not_ok(sol))
 
     path = args.out or HERE / "results" / ("bench_throughput.txt" if dev.platform == "cpu" else f"bench_throughput_{dev.platform}.txt")
