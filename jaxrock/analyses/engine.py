@@ -62,8 +62,10 @@ def even_batches(n: int, limit: int, smallest: int) -> int:
 
 
 # The most cells one pass runs at once on a CPU device (more are run as several passes of this
-# size, one after another): past a few thousand lanes a pass's state leaves the CPU's caches and each
-# cell costs more (benchmarks/bench_throughput.py). Accelerators take the whole batch at once.
+# size, one after another): the fewer a pass's lanes, the less its lockstep waits on its slowest,
+# until each pass's fixed cost tells (a probe of 256/512/1024/4096 on rigid pulse batches of 4096
+# grid cells and 4096 and 32768 random scenes, 2 cores: 512 and 256 best, 4096 worst by a third;
+# benchmarks/bench_throughput.py). Accelerators take the whole batch at once.
 MAX_PASS = {"cpu": 512}
 
 
