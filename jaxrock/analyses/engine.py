@@ -183,7 +183,7 @@ def cell_order(model: AbstractModel, excitations, batched: bool) -> np.ndarray:
     return np.argsort(np.where(np.isfinite(key), key, np.inf), kind="stable")
 
 
-def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh=None, order=None) -> Solution:
+def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh, order: np.ndarray) -> Solution:
     """Run a batch in passes (`Schedule.passes`), gathering the cells still running between
     passes (with `Schedule.lanes`, at most that many, the started ones first, so that a finished
     cell's place goes to the next): the same results as `simulate`, cell by cell. The running cells
@@ -209,7 +209,6 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh=None, 
     state, done = keep(state), np.array(done)
     started = np.zeros(n, dtype=bool)
     used, k = 0, 0
-    order = np.arange(n) if order is None else order
     while lanes or used < stepper.max_steps:  # with lanes, each cell's own bound ends it (`done`)
         todo = order[~done[order]]
         if todo.size == 0:
