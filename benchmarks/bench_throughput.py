@@ -1,7 +1,7 @@
 """Throughput on the workloads users run: ordered grids against random scene sets, batch sizes
 from 4096 to 65536 (and up to 2^20 where a GPU is lent), mixed sizes and slendernesses.
 
-    python benchmarks/bench_throughput.py [--sizes 4096,16384,65536] [--repeat 3] [--quick] [--out FILE]
+    python benchmarks/bench_throughput.py [--sizes 4096,16384,65536] [--spring-sizes 1024,256] [--repeat 3] [--quick] [--out FILE]
 
 Rows (warm µs per scene = the best of `--repeat` more calls / scenes; first call = compilation included;
 stored kernels off, `JAXROCK_CACHE_DIR=off`):
@@ -10,7 +10,7 @@ stored kernels off, `JAXROCK_CACHE_DIR=off`):
   uniform random sets of each `--sizes`; a random set (the least of `--sizes`, at most 4096) of mixed blocks (2h ∈ [2, 50] m, tanα ∈
   [0.1, 0.35], both pulse shapes, one model per scene).
 - Quasi-rigid SM (the same block, default integrator): 1024 random scenes; flexible SM (concrete,
-  2h = 50 m, 2b = 5 m, 10 elements): 256 random scenes.
+  2h = 50 m, 2b = 5 m, 10 elements): 256 random scenes (`--spring-sizes`).
 - Each row also counts the scenes that did not end `ok` (a valid random scene must).
 
 The same command runs on a lent GPU (`device`): the table names the device, and its rows are
@@ -78,6 +78,8 @@ def random_pulses(rng, n, block):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", default="4096,16384,65536", help="random RM set sizes (comma-separated)")
+    ap.add_argument("--spring-sizes", default="1024,256", help="quasi-rigid and flexible SM random set sizes (default 1024,256; larger on a GPU)")
+    ap.add_argument("--models", default="rigid,spring", help="which rows: rigid, spring or both (default)")
     ap.add_argument("--quick", action="store_true", help="small sizes: a smoke run of every row")
     ap.add_argument("--repeat", type=int, default=3, help="warm calls per row, the best counts (default 3)")
     ap.add_argument("--seed", type=int, default=0)
@@ -85,15 +87,28 @@ def main() -> None:
     args = ap.parse_args()
     sizes = [256, 1024] if args.quick else [int(s) for s in args.sizes.split(",")]
     grid = 16 if args.quick else 64
-    n_q, n_f = (64, 16) if args.quick else (1024, 256)
+    n_q, n_f = (64, 16) if args.quick else (int(s) for s in args.spring_sizes.split(","))
     rng = np.random.default_rng(args.seed)
     dev = jax.devices()[0]
     out(f"# bench_throughput: µs per scene by workload and batch size (warm = best of {args.repeat} calls after the first; first = with compilation)")
+    out(f"# engine: MAX_PASS {jr.analyses.engine.MAX_PASS}, lane scale {jr.analyses.engine.LANE_SCALE.get(dev.platform, jr.analyses.engine.ACCELERATOR_LANE_SCALE)} on {dev.platform}")
     out(f"# machine: {platform.machine()}, {jax.device_count()} {dev.platform} device(s) ({dev.device_kind}), "
         f"{os.cpu_count()} cores, jax {jax.__version__}, python {platform.python_version()}")
     out(f"{'workload':58s} {'scenes':>8s} {'first s':>9s} {'warm s':>9s} {'µs/scene':>10s} {'vs grid':>9s} {'not ok':>6s}")
 
     block = jr.Block.from_slenderness(10.0, 0.2)
+    if "rigid" in args.models.split(","):
+        rigid_rows(args, rng, block, sizes, grid)
+    if "spring" in args.models.split(","):
+        spring_rows(rng, block, n_q, n_f, args.repeat)
+
+    path = args.out or HERE / "results" / ("bench_throughput.txt" if dev.platform == "cpu" else f"bench_throughput_{dev.platform}.txt")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(LINES) + "\n")
+    print(f"written to {path}")
+
+
+def rigid_rows(args, rng, block, sizes, grid) -> None:
     model = jr.RigidModel(block)
     wr, ar = np.linspace(1.0, 15.0, grid), np.linspace(0.5, 10.0, grid)
     first, warm, spec = timed(lambda: jr.overturning_spectrum(model, omega_ratio=wr, accel_ratio=ar, progress=False), args.repeat)
@@ -118,17 +133,13 @@ def main() -> None:
         first, warm, sol = timed(lambda: jr.run_batch(models, exc, model_batched=True), args.repeat)
         row(f"RM run_batch, {n} random blocks, {cls.__name__}", n, first, warm, not_ok(sol), grid_us)
 
-    # spring models
+
+def spring_rows(rng, block, n_q, n_f, repeat) -> None:
     for name, sm, n in (("quasi-rigid SM", SpringModel(block), n_q),
                         ("flexible SM (10 elements)", SpringModel(jr.Block.from_size(50.0, 5.0), Column.concrete(), n_elements=10), n_f)):
         exc = random_pulses(rng, n, sm.block)
-        first, warm, sol = timed(lambda: jr.run_batch(sm, exc), args.repeat)
+        first, warm, sol = timed(lambda: jr.run_batch(sm, exc), repeat)
         row(f"{name}, {n} random scenes", n, first, warm, not_ok(sol))
-
-    path = args.out or HERE / "results" / ("bench_throughput.txt" if dev.platform == "cpu" else f"bench_throughput_{dev.platform}.txt")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(LINES) + "\n")
-    print(f"written to {path}")
 
 
 if __name__ == "__main__":

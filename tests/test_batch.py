@@ -308,3 +308,33 @@ def test_gathering_on_the_device_gives_the_bits_of_gathering_on_the_host(monkeyp
     assert int(np.max(np.asarray(host.n_iterations))) > 8  # several passes
     for a, b in zip(jax.tree_util.tree_leaves(host), jax.tree_util.tree_leaves(device)):
         assert np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)
+
+
+def test_an_accelerators_wider_lanes_give_the_same_runs(monkeypatch):
+    """An accelerator multiplies a stepper's `Schedule.lanes` (`engine.LANE_SCALE`,
+    `ACCELERATOR_LANE_SCALE`): forced on this CPU, a spring batch runs in wider passes (seen by the
+    pass sizes) and every cell ends as in the CPU's narrow lanes, to run_batch's 1e-10 (another
+    batch size: the last bits of other fused kernels)."""
+    from jaxrock.analyses import engine, kernels
+
+    rng = np.random.default_rng(5)
+    n = 90
+    block = jr.Block.from_slenderness(6.0, 0.2)
+    model = scene_model("spring", block)
+    exc = jr.RickerPulse(jnp.asarray(rng.uniform(0.5, 6, n) * jr.G * 0.2), jnp.asarray(rng.uniform(1, 12, n) * float(block.p)))
+    sizes = []
+    advance = kernels.advance
+
+    def spy(stepper, e, state, *args):
+        sizes.append(int(jax.tree_util.tree_leaves(state)[0].shape[0]))
+        return advance(stepper, e, state, *args)
+
+    monkeypatch.setattr(kernels, "advance", spy)
+    narrow = jr.run_batch(model, exc)
+    narrow_sizes, sizes[:] = max(sizes), []
+    monkeypatch.setitem(engine.LANE_SCALE, "cpu", 4)
+    wide = jr.run_batch(model, exc)
+    assert narrow_sizes == 64 and max(sizes) == 4 * 64  # the 90 cells in one pass of 256 lanes (its ladder)
+    assert np.array_equal(jr.status_codes(narrow.status), jr.status_codes(wide.status))
+    for name in ("max_theta", "t_uplift", "t_overturn"):
+        np.testing.assert_allclose(np.asarray(getattr(wide, name)), np.asarray(getattr(narrow, name)), rtol=1e-10, atol=1e-12)

@@ -65,8 +65,17 @@ def even_batches(n: int, limit: int, smallest: int) -> int:
 # size, one after another): the fewer a pass's lanes, the less its lockstep waits on its slowest,
 # until each pass's fixed cost tells (a probe of 256/512/1024/4096 on rigid pulse batches of 4096
 # grid cells and 4096 and 32768 random scenes, 2 cores: 512 and 256 best, 4096 worst by a third;
-# benchmarks/bench_throughput.py). Accelerators take the whole batch at once.
+# benchmarks/bench_throughput.py). Accelerators take the whole batch at once (2^20 rigid cells in one
+# batch: 4.9 s on an H100).
 MAX_PASS = {"cpu": 512}
+
+# A stepper's `Schedule.lanes` (a dear step's cells per pass, tuned on CPU cores) is multiplied by
+# this on each platform: an accelerator's loop step costs about the same for many more lanes (its
+# cost is kernel launches, not arithmetic). On an H100 the spring models ran 10-17x slower per scene
+# than 2 CPU cores at the CPU's 64/32 lanes; at 128x them, 8-9x (quasi-rigid) and ~50x (flexible)
+# faster (benchmarks/results/bench_throughput_gpu*.txt); 16x was slower, 1024x no faster.
+LANE_SCALE = {"cpu": 1}
+ACCELERATOR_LANE_SCALE = 128
 
 
 def _bucket(n: int, batch: int, smallest: int) -> int:
@@ -192,8 +201,8 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh, order
     `lanes` is per device."""
     passes, smallest, lanes = stepper.schedule.passes, stepper.schedule.smallest_batch, stepper.schedule.lanes
     n_dev = 1 if mesh is None else mesh.size
-    lanes *= n_dev
     platform = (jax.devices()[0] if mesh is None else mesh.devices.flat[0]).platform
+    lanes *= n_dev * LANE_SCALE.get(platform, ACCELERATOR_LANE_SCALE)
     most = MAX_PASS.get(platform, 2**62) * n_dev
     n = jax.tree_util.tree_leaves(excitations)[0].shape[0]
     # On a CPU the state (and the batched inputs) live on the host between passes: gathers and
