@@ -3,7 +3,8 @@ from 4096 to 65536 (and up to 2^20 where a GPU is lent), mixed sizes and slender
 
     python benchmarks/bench_throughput.py [--sizes 4096,16384,65536] [--spring-sizes 1024,256] [--repeat 3] [--quick] [--out FILE]
 
-Rows (warm µs per scene = the best of `--repeat` more calls / scenes; first call = compilation included;
+JAX gets one CPU device per core (`jaxrock.use_cpu_cores`, as the command line; `--cores 1`: one),
+so `run_batch` deals a batch's cells over them. Rows (warm µs per scene = the best of `--repeat` more calls / scenes; first call = compilation included;
 stored kernels off, `JAXROCK_CACHE_DIR=off`):
 - RM, 2h = 10 m, tanα = 0.2, symmetric Ricker pulse, a_p/(g tanα) ∈ [0.5, 10], ω_p/p ∈ [1, 15]:
   `overturning_spectrum` on the 64 × 64 grid; `run_batch` on the same 4096 grid cells; `run_batch` on
@@ -83,8 +84,10 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="small sizes: a smoke run of every row")
     ap.add_argument("--repeat", type=int, default=3, help="warm calls per row, the best counts (default 3)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--cores", type=int, default=None, help="CPU devices (default: every usable core, as the command line runs)")
     ap.add_argument("--out", type=Path, default=None, help="results file (default: benchmarks/results/bench_throughput[_<platform>].txt)")
     args = ap.parse_args()
+    jr.use_cpu_cores(args.cores)  # as the command line does (before JAX's first computation): a batch dealt over the cores
     sizes = [256, 1024] if args.quick else [int(s) for s in args.sizes.split(",")]
     grid = 16 if args.quick else 64
     n_q, n_f = (64, 16) if args.quick else (int(s) for s in args.spring_sizes.split(","))

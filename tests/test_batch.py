@@ -338,3 +338,52 @@ def test_an_accelerators_wider_lanes_give_the_same_runs(monkeypatch):
     assert np.array_equal(jr.status_codes(narrow.status), jr.status_codes(wide.status))
     for name in ("max_theta", "t_uplift", "t_overturn"):
         np.testing.assert_allclose(np.asarray(getattr(wide, name)), np.asarray(getattr(narrow, name)), rtol=1e-10, atol=1e-12)
+
+
+_DEALT = """
+import jax, numpy as np
+import jaxrock as jr
+from jaxrock.analyses import engine
+from jaxrock.io.scenes_file import scene_model
+assert len(jax.local_devices()) == 2
+used, compacted = [], engine._compacted
+engine._compacted = lambda *a: used.append(jax.config.jax_default_device) or compacted(*a)
+rng = np.random.default_rng(11)
+for kind, n in (("rigid", 300), ("blocks", 300), ("spring", 160)):
+    if kind == "blocks":
+        h, t = rng.uniform(2, 30, n), rng.uniform(0.1, 0.3, n)
+        model = jax.vmap(lambda h, t: jr.RigidModel(jr.Block.from_slenderness(h, t)))(h, t)
+        a, w = rng.uniform(0.5, 8, n) * jr.G * t, rng.uniform(1, 12, n) * np.asarray(model.block.p)
+    else:
+        block = jr.Block.from_slenderness(6.0, 0.2)
+        model = jr.RigidModel(block) if kind == "rigid" else scene_model("spring", block)
+        a, w = rng.uniform(0.5, 8, n) * jr.G * 0.2, rng.uniform(1, 12, n) * float(block.p)
+    exc = jr.AntisymmetricRickerPulse(a, w)
+    used.clear()
+    one = jr.run_batch(model, exc, model_batched=kind == "blocks", devices=jax.local_devices()[:1])
+    assert used == [None], used
+    used.clear()
+    both, again = (jr.run_batch(model, exc, model_batched=kind == "blocks") for _ in range(2))
+    assert sorted(d.id for d in used) == [0, 0, 1, 1], used  # a share per device, each call
+    for x, y in zip(jax.tree_util.tree_leaves(both), jax.tree_util.tree_leaves(again)):
+        assert np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True)
+    assert np.array_equal(jr.status_codes(one.status), jr.status_codes(both.status)) and (jr.status_codes(both.status) == 0).all()
+    assert np.array_equal(one.overturned, both.overturned) and one.overturned.any() and not one.overturned.all()
+    for name in ("max_theta", "t_uplift", "t_overturn"):
+        np.testing.assert_allclose(getattr(both, name), getattr(one, name), rtol=1e-10, atol=1e-12)
+print("DEALT OK")
+"""
+
+
+def test_a_batch_is_dealt_over_a_cpus_devices_with_one_devices_results():
+    """With one JAX device per core (`jaxrock.use_cpu_cores`, here 2 forced host devices) a batch's
+    cells are dealt to the devices, a share each, run from a thread each: rigid cells, a model per
+    cell, refilled spring lanes. The results are one device's (to run_batch's 1e-10: other batch
+    sizes), every status and verdict the same, and two calls give the same bits."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2", "JAX_PLATFORMS": "cpu"}
+    r = subprocess.run([sys.executable, "-c", _DEALT], env=env, capture_output=True, text=True, timeout=280)
+    assert r.returncode == 0 and "DEALT OK" in r.stdout, r.stderr[-3000:]

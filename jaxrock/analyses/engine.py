@@ -20,6 +20,9 @@ every excitation, or one per scene with `model_batched`); `run_scenes`
 
 from __future__ import annotations
 
+from concurrent.futures import ALL_COMPLETED, FIRST_COMPLETED, ThreadPoolExecutor, wait
+from typing import Callable, Iterable
+
 import equinox as eqx
 import jax
 import numpy as np
@@ -246,6 +249,91 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh, order
     return _finish(stepper, excitations, state, batched)
 
 
+def on_devices(fn: Callable, items: Iterable, devices, done: Callable) -> None:
+    """`fn(item, [device])` for each of `items`, one item per local device at a time (`devices`;
+    None: every local one), each from a thread of its own: host devices dispatched from one thread
+    run one after the other, so a CPU's cores (one device each, `jaxrock.use_cpu_cores`) are used
+    by running an item on each. `done(item, result)` runs in the calling thread as each finishes.
+    `interrupt.stop_point()` is checked before each item starts; leaving (an interruption, an
+    error) waits for the items in flight and hands the finished ones to `done` first."""
+    from .. import interrupt
+
+    free = list(jax.local_devices() if devices is None else devices)[::-1]
+    if len(free) == 1:  # one device: in this thread
+        for item in items:
+            interrupt.stop_point()
+            done(item, fn(item, free))
+        return
+    in_flight = {}  # future → (position, item, device)
+
+    def collect(block: bool):
+        finished, _ = wait(in_flight, return_when=FIRST_COMPLETED if block else ALL_COMPLETED)
+        failed = None
+        for fut in sorted(finished, key=lambda f: in_flight[f][0]):
+            _, item, dev = in_flight.pop(fut)
+            free.append(dev)
+            if fut.exception() is not None:  # the others are kept before it is raised
+                failed = failed or fut.exception()
+            else:
+                done(item, fut.result())
+        if failed is not None:
+            raise failed
+
+    with ThreadPoolExecutor(max_workers=len(free)) as pool:
+        try:
+            for i, item in enumerate(items):
+                interrupt.stop_point()
+                if not free:
+                    collect(block=True)
+                dev = free.pop()
+                in_flight[pool.submit(fn, item, [dev])] = (i, item, dev)
+        finally:
+            if in_flight:
+                collect(block=False)
+
+def _host_devices(devices, n: int, smallest: int) -> list:
+    """The CPU devices a batch of `n` cells is dealt over (`_dealt`): with `devices` None, every
+    local one where JAX has several (one per core, `jaxrock.use_cpu_cores`), as many as hold at
+    least `smallest` cells each; else none (an accelerator's passes take the whole batch, and given
+    `devices` are a mesh's, `mesh_of`)."""
+    local = jax.local_devices() if devices is None else []
+    if len(local) < 2 or local[0].platform != "cpu":
+        return []
+    return local[: min(len(local), n // smallest)]
+
+
+def _dealt(stepper: AbstractStepper, excitations, batched: bool, order: np.ndarray, devices: list) -> Solution:
+    """A batch over a CPU's devices: its cells, in `order`, dealt to the devices in turn (so that
+    each share spans every intensity and costs about the same), each share run by `_compacted` on
+    its device from a thread of its own (`on_devices`): a CPU device's computations run on the
+    thread that asks for them, so one thread uses one core (2 cores: 1.7-1.9x one thread on rigid
+    and spring batches, benchmarks/bench_throughput.py). The shares are fixed by `order`, so the
+    bits do not depend on the threads' timing; a cell's last bits are those of its share's batch
+    (`run_batch`: 1e-10)."""
+    k, n = len(devices), order.size
+    shares = [order[g::k] for g in range(k)]
+    dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
+    dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
+    host = lambda t, idx: jax.tree_util.tree_map(lambda x: np.asarray(x)[idx], t)
+
+    def run(g: int, device):
+        idx = shares[g]
+        with jax.default_device(device[0]):
+            sub_s = eqx.combine(host(dyn_s, idx) if batched else host(dyn_s, ...), static_s)
+            return _compacted(sub_s, eqx.combine(host(dyn_e, idx), static_e), batched, None, np.arange(idx.size))
+
+    parts: dict[int, Solution] = {}
+    on_devices(run, range(k), devices, parts.__setitem__)
+
+    def merged(*leaves):
+        out = np.empty((n, *np.shape(leaves[0])[1:]), np.asarray(leaves[0]).dtype)
+        for idx, leaf in zip(shares, leaves):
+            out[idx] = np.asarray(leaf)
+        return out
+
+    return jax.tree_util.tree_map(merged, *(parts[g] for g in range(k)))
+
+
 def run_batch(
     model: AbstractModel,
     excitations: AbstractExcitation,
@@ -273,7 +361,12 @@ def run_batch(
     model, excitations, ok = _guard(model, excitations, model_batched)
     stepper = make_stepper(model, integ, model_batched)
     if stepper.schedule.passes:
-        sol = _compacted(stepper, excitations, model_batched, mesh_of(devices), cell_order(model, excitations, model_batched))
+        order = cell_order(model, excitations, model_batched)
+        cores = _host_devices(devices, order.size, stepper.schedule.smallest_batch)
+        if len(cores) > 1:
+            sol = _dealt(stepper, excitations, model_batched, order, cores)
+        else:
+            sol = _compacted(stepper, excitations, model_batched, mesh_of(devices), order)
     else:
         sol = _solve(stepper, excitations, model_batched)
     return _flag(sol, ok)

@@ -25,7 +25,7 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import ALL_COMPLETED, FIRST_COMPLETED, ThreadPoolExecutor, wait
+from concurrent.futures import ThreadPoolExecutor
 from typing import Callable, Iterable
 
 import numpy as np
@@ -33,7 +33,7 @@ import numpy as np
 from .._validate import JaxrockInputError, check_range
 from ..outputs import OUTPUTS
 from ..scene import DEFAULT_PULSE, MODEL_KINDS, PULSES, SWEEP_QUANTITIES, model_kinds, takes
-from .engine import batch_limit, make_stepper, run_batch
+from .engine import batch_limit, make_stepper, on_devices, run_batch
 
 QUANTITIES = SWEEP_QUANTITIES
 AXIS_ORDER = tuple(QUANTITIES)  # a store's dimensions, outermost first
@@ -433,51 +433,6 @@ def _run(sweep, store, client, devices, progress, on_chunk):
     if store is None:
         return zstore.in_memory(sweep, held)
     return zstore.load(store)
-
-
-def on_devices(fn: Callable, items: Iterable, devices, done: Callable) -> None:
-    """`fn(item, [device])` for each of `items`, one item per local device at a time (`devices`;
-    None: every local one), each from a thread of its own: host devices dispatched from one thread
-    run one after the other, so a CPU's cores (one device each, `jaxrock.use_cpu_cores`) are used
-    by running an item on each. `done(item, result)` runs in the calling thread as each finishes.
-    `interrupt.stop_point()` is checked before each item starts; leaving (an interruption, an
-    error) waits for the items in flight and hands the finished ones to `done` first."""
-    import jax
-
-    from .. import interrupt
-
-    free = list(jax.local_devices() if devices is None else devices)[::-1]
-    if len(free) == 1:  # one device: in this thread
-        for item in items:
-            interrupt.stop_point()
-            done(item, fn(item, free))
-        return
-    in_flight = {}  # future → (position, item, device)
-
-    def collect(block: bool):
-        finished, _ = wait(in_flight, return_when=FIRST_COMPLETED if block else ALL_COMPLETED)
-        failed = None
-        for fut in sorted(finished, key=lambda f: in_flight[f][0]):
-            _, item, dev = in_flight.pop(fut)
-            free.append(dev)
-            if fut.exception() is not None:  # the others are kept before it is raised
-                failed = failed or fut.exception()
-            else:
-                done(item, fut.result())
-        if failed is not None:
-            raise failed
-
-    with ThreadPoolExecutor(max_workers=len(free)) as pool:
-        try:
-            for i, item in enumerate(items):
-                interrupt.stop_point()
-                if not free:
-                    collect(block=True)
-                dev = free.pop()
-                in_flight[pool.submit(fn, item, [dev])] = (i, item, dev)
-        finally:
-            if in_flight:
-                collect(block=False)
 
 
 def _run_here(sweep: Sweep, todo: Iterable[int], store, held: dict, devices, finished_chunk: Callable[[int], None]) -> None:
