@@ -142,6 +142,18 @@ class AbstractStepper(eqx.Module):
         """How a batch of these scenes is advanced (default: one vmapped `solve` per batch)."""
         return Schedule()
 
+    @property
+    def parts(self) -> tuple["AbstractStepper", ...]:
+        """Independent runs this stepper's loop advances together, whose `Solution`s `join` makes
+        its own (`jaxrock.spring.CheckedStepper`: the run and its companion); () for one run. The
+        batch engine runs each part apart, in its own passes: under `vmap` a loop step of the whole
+        costs every part's step, the finished ones' too."""
+        return ()
+
+    def join(self, excitation: AbstractExcitation, solutions: tuple[Solution, ...]) -> Solution:
+        """The `Solution` of the whole from its `parts`' (only where there are parts)."""
+        raise NotImplementedError(f"{type(self).__name__} has no parts to join")
+
     def advance(self, excitation: AbstractExcitation, state: PyTree, n) -> PyTree:
         """At most `n` (may be traced) more steps; forward-mode loop."""
         state, _ = jax.lax.while_loop(lambda sk: ~self.done(sk[0]) & (sk[1] < n),

@@ -67,6 +67,27 @@ def test_checked_judges_a_diffrax_run_both_ways():
         assert float(s.max_theta) == float(plain.max_theta)
 
 
+def test_a_checked_batch_runs_its_run_and_companion_apart_with_each_cells_verdict(monkeypatch):
+    """`run_batch` runs a checked batch's run and companion apart (`CheckedStepper.parts`, each in
+    its own passes: in one loop every step would cost both, the finished companion's too) and
+    joins them: every cell's summary, step count and verdict are those of its `simulate` (one
+    loop, both states), with a strict accuracy that flags some cells."""
+    from jaxrock.analyses import kernels
+    from jaxrock.spring.checked import CheckedStepper
+
+    kinds = set()
+    advance = kernels.advance
+    monkeypatch.setattr(kernels, "advance", lambda st, *a: kinds.add(type(st).__name__) or advance(st, *a))
+    ex, strict = grid(), Checked(GA5, accuracy=1e-5)
+    batch, alone = jr.run_batch(MODEL, ex, strict), run(strict, ex)
+    assert kinds == {"GeneralizedAlphaStepper"}  # no pass of the two in one loop
+    assert isinstance(MODEL.stepper(strict), CheckedStepper)
+    names = jr.status_names(batch.status)
+    assert np.array_equal(names, jr.status_names(alone.status)) and set(names.tolist()) == {"ok", "inaccurate"}, names
+    np.testing.assert_array_equal(np.asarray(batch.n_iterations), np.asarray(alone.n_iterations))
+    np.testing.assert_allclose(np.asarray(batch.max_theta), np.asarray(alone.max_theta), rtol=1e-10, atol=1e-12)
+
+
 @pytest.mark.parametrize("kw, match", [
     (dict(accuracy=0.0), "accuracy"),
     (dict(accuracy=1.5), "accuracy"),

@@ -146,6 +146,11 @@ def _finish(stepper, exc, state, batched):
 
 
 @eqx.filter_jit
+def _join(stepper, exc, sols, batched):
+    return _vmap(lambda s, es: s.join(es[0], es[1]), batched)(stepper, (exc, sols))
+
+
+@eqx.filter_jit
 def _solve(stepper, exc, batched):
     return _vmap(lambda s, e: s.solve(e), batched)(stepper, exc)
 
@@ -360,13 +365,21 @@ def run_batch(
     _check_batch_sizes(model, excitations, model_batched)
     model, excitations, ok = _guard(model, excitations, model_batched)
     stepper = make_stepper(model, integ, model_batched)
-    if stepper.schedule.passes:
-        order = cell_order(model, excitations, model_batched)
-        cores = _host_devices(devices, order.size, stepper.schedule.smallest_batch)
-        if len(cores) > 1:
-            sol = _dealt(stepper, excitations, model_batched, order, cores)
-        else:
-            sol = _compacted(stepper, excitations, model_batched, mesh_of(devices), order)
-    else:
-        sol = _solve(stepper, excitations, model_batched)
+    sol = _execute(stepper, excitations, model_batched, lambda: cell_order(model, excitations, model_batched), devices)
     return _flag(sol, ok)
+
+
+def _execute(stepper: AbstractStepper, excitations, batched: bool, order, devices) -> Solution:
+    """A batch's `Solution`s through `stepper`: each of its `parts` apart, joined; else in passes
+    (`Schedule.passes`: dealt over a CPU's devices or compacted on one device or mesh), else as one
+    vmapped solve. `order()`: the cells' order (`cell_order`)."""
+    if stepper.parts:
+        sols = tuple(_execute(part, excitations, batched, order, devices) for part in stepper.parts)
+        return _join(stepper, excitations, sols, batched)
+    if not stepper.schedule.passes:
+        return _solve(stepper, excitations, batched)
+    order = order()
+    cores = _host_devices(devices, order.size, stepper.schedule.smallest_batch)
+    if len(cores) > 1:
+        return _dealt(stepper, excitations, batched, order, cores)
+    return _compacted(stepper, excitations, batched, mesh_of(devices), order)

@@ -136,15 +136,17 @@ class GeneralizedAlphaStepper(AbstractStepper):
         # a quasi-rigid step is cheap and its batch overhead large (below 64 cells gathering stops
         # paying; 32×32 grid: 0.09 ms/scene vs 0.15 with 8). A flexible step is dear (~2.2 µs a
         # cell from 16 cells on, 2 cores) and its cells' lengths differ tenfold (90–1250 steps on
-        # the benchmark's grid): 16 lanes refilled every 256 steps (three concrete-column grids,
-        # 8×8 to 16×16: 1.6–2.1 ms/scene against 2.1–3.8 gathering every running cell; 16 lanes
-        # every 128 steps 2.4–2.5, 32 every 256 1.7–2.2), the last cells too on 16 lanes: one
-        # compiled size (cold compile 4.8 s, as gathering; a tail on 8 lanes is a second size, 6.2
-        # s, for no measurable gain). A cell keeps its ladder of tangent inverses (levels × N² floats).
+        # the benchmark's grid): lanes refilled every 256 steps (three concrete-column grids,
+        # 8×8 to 16×16, one core: 16 lanes 1.6–2.1 ms/scene against 2.1–3.8 gathering every running
+        # cell; 16 lanes every 128 steps 2.4–2.5, 32 every 256 1.7–2.2). 32 lanes since a batch is
+        # dealt over a CPU's cores and a `Checked` run's companion runs apart (two sets of 256
+        # random 10-element scenes, 2 cores: 2.8–3.1 ms/scene against 3.1–3.5 on 16 lanes, 8 lanes
+        # 5.3, 64 lanes 2.9). The last cells too on these lanes: one compiled size. A cell keeps
+        # its ladder of tangent inverses (levels × N² floats).
         N = self.system.ndof
         if N == 1:
             return Schedule(passes=(128, 256, 512, 1024), smallest_batch=64)
-        return Schedule(passes=(256,), smallest_batch=16, lanes=16, bytes_per_scene=self.integrator.levels * N * N * 8)
+        return Schedule(passes=(256,), smallest_batch=16, lanes=32, bytes_per_scene=self.integrator.levels * N * N * 8)
 
     def init(self, exc):
         return self._loop(exc)[0]()
