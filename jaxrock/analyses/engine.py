@@ -311,7 +311,7 @@ def _dealt(stepper: AbstractStepper, excitations, batched: bool, order: np.ndarr
     """A batch over a CPU's devices: its cells, in `order`, dealt to the devices in turn (so that
     each share spans every intensity and costs about the same), each share run by `_compacted` on
     its device from a thread of its own (`on_devices`): a CPU device's computations run on the
-    thread that asks for them, so one thread uses one core (2 cores: 1.7-1.9x one thread on rigid
+    thread that asks for them, so one thread uses one core (2 cores: 1.8-2.2x one thread on rigid
     and spring batches, benchmarks/bench_throughput.py). The shares are fixed by `order`, so the
     bits do not depend on the threads' timing; a cell's last bits are those of its share's batch
     (`run_batch`: 1e-10)."""

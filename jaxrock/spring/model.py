@@ -112,7 +112,7 @@ class SpringModel(AbstractModel):
         - flexible → `Checked(GeneralizedAlpha(1e-5, 1e-5))`, ρ∞ = 0.9, accuracy 1e-2 in max θ/α′:
           its status is `inaccurate` where a companion run at 1e-4 differs by more (a stiff spring
           or column, where the local tolerance does not bound the global error: `jaxrock.spring.
-          checked`); about twice an unchecked run's cost. Forward-mode differentiable; for
+          checked`); the companion's looser steps on top of the run's (a batch runs the two apart). Forward-mode differentiable; for
           `jax.grad` through a flexible column, `SpringIntegrator()`, Kvaerno5 + Newton.
 
         `autodiff`: "reverse" or "forward" (`AbstractModel.default_integrator`); the flexible
