@@ -4,7 +4,8 @@ spring-model summaries) a batch is advanced a few loop steps at a time and the c
 running are gathered into a smaller batch between passes, so that a few long cells (chattering
 near the uplift line, rocking near the overturning line) do not make the whole batch wait; with
 `Schedule.lanes` (the spring model's dearer steps) a pass holds at most that many cells and a
-finished cell's place goes to the next one. Else it is one vmapped solve. Lanes of a pass move in
+finished cell's place goes to the next one; a stepper made of independent runs (`parts`: a
+`Checked` run and its companion) runs each apart. Else it is one vmapped solve. Lanes of a pass move in
 lockstep, each loop step costing the pass its slowest lane's work, so the cells run in the order of
 their intensity (`cell_order`: peak |üg| over g tanα′), and on a CPU a pass holds at most
 `MAX_PASS` cells: cells that rock alike share a pass, and a pass's state stays in the caches.
@@ -12,7 +13,8 @@ Every scene is guarded as `simulate` guards it. Used by the spectra, the
 scenes files and any sweep. With several local devices each pass is sharded over them
 (`kernels.advance`: a `NamedSharding` of the cells over a 1-D mesh, each device running the
 one-device kernel on its block: the last bits of a smaller batch). A CPU's devices (one per core,
-`jaxrock.use_cpu_cores`) serve a sweep's chunks instead, one chunk per device (`sweep.on_devices`).
+`jaxrock.use_cpu_cores`) run a batch's cells dealt in shares, one per device from a thread each
+(`_dealt`), and a sweep's chunks one per device (`on_devices`).
 
 Three calls, three sizes: `simulate` runs one scene; `run_batch` a batch in memory (one model for
 every excitation, or one per scene with `model_batched`); `run_scenes`

@@ -141,7 +141,7 @@ def advance(stepper, excitations, state, n, batched: bool, mesh=None):
     n = jnp.asarray(n)
     structure = (batched, tree_s, tree_e, tree_c, _static(static_s), _static(static_e),
                  _shapes(leaves_s, batched), _shapes(leaves_e, True), _shapes(leaves_c, True), str(n.dtype))
-    with _MAKING:  # chunks run from several threads (`sweep.on_devices`): one trace per structure
+    with _MAKING:  # chunks and shares run from several threads (`engine.on_devices`): one trace per structure
         kernel = _KERNELS.get((structure, mesh))
         if kernel is None:
             exported = _advance_kernel(structure, (leaves_s, leaves_e, leaves_c, n), (static_s, static_e))
