@@ -109,6 +109,9 @@ def _finish(proc) -> int:
 
 
 SWEEP = ["sweep", "--accel-ratio", "0.8:8:6", "--omega-ratio", "1:12:6", "--chunk-size", "1", "-q"]
+# 144 one-scene chunks: the signal, sent once the progress bar shows 2-19 done, must arrive before
+# the last chunk ends (36 chunks once all ended first, in a loaded CI run: kept 36 of 36)
+KILL_SWEEP = ["sweep", "--accel-ratio", "0.8:8:12", "--omega-ratio", "1:12:12", "--chunk-size", "1", "-q"]
 
 
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT])
@@ -117,20 +120,20 @@ def test_killed_sweep_resumes_to_the_same_bits(tmp_path, sig):
     next chunk, exit 130 and the resume command; SIGKILL: at once), then rerun with the same
     command: the store equals an uninterrupted run's, bit for bit."""
     whole = tmp_path / "whole.zarr"
-    rc = _finish(jaxrock_process(*SWEEP, "--store", whole, cwd=tmp_path))
+    rc = _finish(jaxrock_process(*KILL_SWEEP, "--store", whole, cwd=tmp_path))
     assert rc == 0
     cut = tmp_path / "cut.zarr"
-    w = Watch(jaxrock_process(*SWEEP[:-1], "--store", cut, cwd=tmp_path))  # with its progress bar, to see it run
-    w.wait_for(r"\b([2-9]|1[0-9])/36")
+    w = Watch(jaxrock_process(*KILL_SWEEP[:-1], "--store", cut, cwd=tmp_path))  # with its progress bar, to see it run
+    w.wait_for(r"\b([2-9]|1[0-9])/144")
     w.proc.send_signal(sig)
     rc, out, err = w.finish()
     kept = int(xr.open_zarr(cut, chunks=None).chunk_done.sum())
-    assert 0 < kept < 36, f"the stop came too late or too early: {kept} of 36 chunks"
+    assert 0 < kept < 144, f"the stop came too late or too early: {kept} of 144 chunks"
     if sig == signal.SIGINT:
-        assert rc == 130 and f"interrupted: {kept} of 36 chunks kept in" in err and "resume with: jaxrock sweep" in err
+        assert rc == 130 and f"interrupted: {kept} of 144 chunks kept in" in err and "resume with: jaxrock sweep" in err
     else:
         assert rc == -signal.SIGKILL
-    rc = _finish(jaxrock_process(*SWEEP, "--store", cut, cwd=tmp_path))
+    rc = _finish(jaxrock_process(*KILL_SWEEP, "--store", cut, cwd=tmp_path))
     assert rc == 0
     a, b = xr.open_zarr(whole, chunks=None), xr.open_zarr(cut, chunks=None)
     _same(a, b)
