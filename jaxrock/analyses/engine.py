@@ -22,6 +22,7 @@ every excitation, or one per scene with `model_batched`); `run_scenes`
 
 from __future__ import annotations
 
+import functools
 from concurrent.futures import ALL_COMPLETED, FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Callable, Iterable
 
@@ -77,8 +78,9 @@ MAX_PASS = {"cpu": 512}
 # A stepper's `Schedule.lanes` (a dear step's cells per pass, tuned on CPU cores) is multiplied by
 # this on each platform: an accelerator's loop step costs about the same for many more lanes (its
 # cost is kernel launches, not arithmetic). On an H100 the spring models ran 10-17x slower per scene
-# than 2 CPU cores at the CPU's 64/32 lanes; at 128x them, 8-9x (quasi-rigid) and ~50x (flexible)
-# faster (benchmarks/results/bench_throughput_gpu*.txt); 16x was slower, 1024x no faster.
+# than 2 CPU cores at the CPU's lanes; at 128x them, 4.9x (quasi-rigid, 65536 random scenes) and
+# 29x (flexible, 8192) faster than 2 cores (benchmarks/results/bench_throughput_gpu_spring.txt,
+# bench_throughput_spring_large.txt); 16x was slower, 1024x no faster.
 LANE_SCALE = {"cpu": 1}
 ACCELERATOR_LANE_SCALE = 128
 
@@ -298,6 +300,7 @@ def on_devices(fn: Callable, items: Iterable, devices, done: Callable) -> None:
             if in_flight:
                 collect(block=False)
 
+
 def _host_devices(devices, n: int, smallest: int) -> list:
     """The CPU devices a batch of `n` cells is dealt over (`_dealt`): with `devices` None, every
     local one where JAX has several (one per core, `jaxrock.use_cpu_cores`), as many as hold at
@@ -322,11 +325,12 @@ def _dealt(stepper: AbstractStepper, excitations, batched: bool, order: np.ndarr
     dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
     dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
     host = lambda t, idx: jax.tree_util.tree_map(lambda x: np.asarray(x)[idx], t)
+    shared = None if batched else eqx.combine(host(dyn_s, ...), static_s)  # one model: on the host, for every share
 
     def run(g: int, device):
         idx = shares[g]
         with jax.default_device(device[0]):
-            sub_s = eqx.combine(host(dyn_s, idx) if batched else host(dyn_s, ...), static_s)
+            sub_s = eqx.combine(host(dyn_s, idx), static_s) if batched else shared
             return _compacted(sub_s, eqx.combine(host(dyn_e, idx), static_e), batched, None, np.arange(idx.size))
 
     parts: dict[int, Solution] = {}
@@ -367,7 +371,8 @@ def run_batch(
     _check_batch_sizes(model, excitations, model_batched)
     model, excitations, ok = _guard(model, excitations, model_batched)
     stepper = make_stepper(model, integ, model_batched)
-    sol = _execute(stepper, excitations, model_batched, lambda: cell_order(model, excitations, model_batched), devices)
+    order = functools.cache(lambda: cell_order(model, excitations, model_batched))  # once, for every part
+    sol = _execute(stepper, excitations, model_batched, order, devices)
     return _flag(sol, ok)
 
 
