@@ -278,8 +278,8 @@ def test_cells_run_in_passes_of_like_intensity_and_results_follow_their_cells(mo
         return np.stack([np.asarray(x, dtype=float) for x in (s.max_theta, s.t_overturn, s.overturned, s.n_impacts)])
 
     given = batch(np.arange(n))
-    first = passes[:4]  # the first round: 200 cells in passes of 64, 64, 64, 8 (padded to 64)
-    assert [p.size for p in first] == [64] * 4
+    first = passes[:4]  # the first round: 200 cells in passes of 64, 64, 64, 8 (padded to 16, `engine._pieces`)
+    assert [p.size for p in first] == [64, 64, 64, 16]
     cells = [p[: 64 if i < 3 else 8] for i, p in enumerate(first)]
     assert all(np.all(np.diff(c) >= 0) for c in cells) and all(a[-1] <= b[0] for a, b in zip(cells, cells[1:]))
     assert np.allclose(np.sort(np.concatenate(cells)), np.sort(ar))

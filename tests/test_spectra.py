@@ -58,6 +58,14 @@ def test_grid_passes_and_refinement_share_the_ladder_sizes(model, monkeypatch):
     assert engine.even_batches(48 * 48, 4096, 64) == 256
     assert {engine._bucket(k, 256, 64) for k in range(1, 257)} == {1, 4, 16, 64, 256}
     assert engine.ladder(48, 64) == 64 and engine.ladder(1, 8) == 8 and engine.ladder(300, 64) == 512
+    # a pass's running cells run in pieces of those sizes that cover them, each padded by at most
+    # `PIECE_SLACK` or no larger than `smallest` (`engine._pieces`)
+    for k in range(1, 1200):
+        pieces = engine._pieces(k, 1024, 64)
+        assert set(pieces) <= {1, 4, 16, 64, 256, 1024} and sum(pieces) >= k and sum(pieces[:-1]) < k, (k, pieces)
+        last = k - sum(pieces[:-1])
+        assert pieces[-1] <= max(engine.PIECE_SLACK * last, 64), (k, pieces)
+    assert engine._pieces(200, 512, 64) == [128, 32, 32, 8] and engine._pieces(500, 512, 64) == [512]
     for n, limit in ((10**6, 4096), (2304, 500), (300, 4096), (9, 4096), (100, 10)):
         b = engine.even_batches(n, limit, 64)
         assert 1 <= b <= limit and (b == n or b == limit or -(-n // b) >= 4), (n, limit, b)
