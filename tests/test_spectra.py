@@ -64,8 +64,9 @@ def test_grid_passes_and_refinement_share_the_ladder_sizes(model, monkeypatch):
         pieces = engine._pieces(k, 1024, 64)
         assert set(pieces) <= {1, 4, 16, 64, 256, 1024} and sum(pieces) >= k and sum(pieces[:-1]) < k, (k, pieces)
         last = k - sum(pieces[:-1])
-        assert pieces[-1] <= max(engine.PIECE_SLACK * last, 64), (k, pieces)
+        assert pieces[-1] <= max(engine.PIECE_SLACK["cpu"] * last, 64), (k, pieces)
     assert engine._pieces(200, 512, 64) == [128, 32, 32, 8] and engine._pieces(500, 512, 64) == [512]
+    assert engine._pieces(200, 512, 64, float("inf")) == [512]  # an accelerator's: one padded piece
     for n, limit in ((10**6, 4096), (2304, 500), (300, 4096), (9, 4096), (100, 10)):
         b = engine.even_batches(n, limit, 64)
         assert 1 <= b <= limit and (b == n or b == limit or -(-n // b) >= 4), (n, limit, b)

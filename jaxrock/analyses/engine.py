@@ -96,22 +96,24 @@ def _bucket(n: int, batch: int, smallest: int) -> int:
     return size
 
 
-# How much padding a pass piece may carry (`_pieces`): a piece is the least size of `_bucket`'s
-# ladder that holds the cells left when it pads them by at most this factor, else the next size down.
-PIECE_SLACK = 1.25
+# How much padding a pass piece may carry on each platform (`_pieces`): a piece is the least size
+# of `_bucket`'s ladder that holds the cells left when it pads them by at most this factor, else the
+# next size down. An accelerator pads freely (one piece: a padded lane costs it next to nothing, a
+# launch does).
+PIECE_SLACK = {"cpu": 1.25}
 
 
-def _pieces(n: int, batch: int, smallest: int) -> list[int]:
+def _pieces(n: int, batch: int, smallest: int, slack: float = PIECE_SLACK["cpu"]) -> list[int]:
     """The padded sizes, in turn, that a pass of `n` running cells is run in: each the least
-    `_bucket` size that holds the cells left when that pads them by at most `PIECE_SLACK`, else the
-    next size down (full). On a CPU a padded lane costs a cell's work and a lane of a larger piece
-    waits on more neighbours: 200 cells run as 128 + 32 + 32 + 8 rather than padded to 512
-    (`benchmarks/bench_throughput.py`, 2 cores: 4096 random rigid pulse scenes 65.9 → 54.8 µs a
-    scene, 1.59 → 1.22× the ordered grid's; 65536, 40.9 → 32.2)."""
+    `_bucket` size that holds the cells left when that pads them by at most `slack`, else the next
+    size down (full); sizes up to `smallest` pad freely. On a CPU a padded lane costs a cell's work
+    and a lane of a larger piece waits on more neighbours: 200 cells run as 128 + 32 + 32 + 8 rather
+    than padded to 512 (`benchmarks/bench_throughput.py`, 2 cores: 4096 random rigid pulse scenes
+    65.9 → 54.8 µs a scene, 1.59 → 1.22× the ordered grid's; 65536, 40.9 → 32.2)."""
     sizes = []
     while n > 0:
         size = _bucket(n, batch, smallest)
-        if size > PIECE_SLACK * n and size > smallest:
+        if size > slack * n and size > smallest:
             size //= 4
         sizes.append(size)
         n -= size
@@ -261,7 +263,8 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh, order
             started[todo] = True
             n_pass, sizes = passes[k], [_bucket(todo.size, lanes, smallest)]
         else:
-            n_pass, sizes = min(passes[k], stepper.max_steps - used), _pieces(todo.size, min(n, most), smallest)
+            n_pass = min(passes[k], stepper.max_steps - used)
+            sizes = _pieces(todo.size, min(n, most), smallest, PIECE_SLACK.get(platform, float("inf")))
         lo = 0
         for size in sizes:
             size = -(-size // n_dev) * n_dev
