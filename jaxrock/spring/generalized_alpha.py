@@ -176,7 +176,6 @@ class GeneralizedAlphaStepper(AbstractStepper):
         """(initial, body, result) of the step loop on `excitation`: closures over the scene's
         constants (cheap: the ladder's tangent inverses are computed in `initial` only)."""
         ig, mech, model = self.integrator, self.system, self.model
-        block = BLOCK
         watch = model.watch(mech)
         t_stop = model.run_end(mech, excitation, self.save, self.t1)
         summary = self.save is None
@@ -328,7 +327,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
 
         def attempt(c, buf):
             """One attempted step of a cell still running (else nothing): the state after it, and
-            `buf` (the block's accepted step ends, `block`) with its end where accepted."""
+            `buf` (the block's accepted step ends, `body`) with its end where accepted."""
             active = ~c["done"] & (c["steps"] < ig.max_steps)
             s = step(c)
             k = c["k"]
@@ -374,13 +373,12 @@ class GeneralizedAlphaStepper(AbstractStepper):
             return dict(out, Kinv=Kinv), buf
 
         def body(c):
-            """`block` attempts (`attempt`), then the record of their accepted steps (`Watch.steps`
+            """`BLOCK` attempts (`attempt`), then the record of their accepted steps (`Watch.steps`
             on the step ends, the block's start first) and, for a summary, whether the run has
-            settled: once a block, not once a step (under `vmap` every lane pays for each, and the
-            two were a third of a flexible column's step)."""
-            nan = jnp.full(block + 1, jnp.nan, dtype)
+            settled: once a block, not once a step (`BLOCK`)."""
+            nan = jnp.full(BLOCK + 1, jnp.nan, dtype)
             buf = (nan.at[0].set(c["t"]), nan.at[0].set(c["q"][0]), nan.at[0].set(c["v"][0]), jnp.zeros((), jnp.int32))
-            c, (ts, th, om, _) = jax.lax.fori_loop(0, block, lambda _, cb: attempt(*cb), (c, buf))
+            c, (ts, th, om, _) = jax.lax.fori_loop(0, BLOCK, lambda _, cb: attempt(*cb), (c, buf))
             rec = c["rec"].merge(watch.steps(ts, th, om))
             finished = c["done"] | rec.overturned
             if summary:
