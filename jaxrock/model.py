@@ -150,6 +150,13 @@ class AbstractStepper(eqx.Module):
         costs every part's step, the finished ones' too."""
         return ()
 
+    @property
+    def shared_start(self) -> bool:
+        """Whether every one of the `parts` starts from the same state (`init`, bit for bit): the
+        batch engine then computes it once (a flexible generalized-α start holds its ladder of
+        tangent inverses, the dearest of its preparation)."""
+        return False
+
     def join(self, excitation: AbstractExcitation, solutions: tuple[Solution, ...]) -> Solution:
         """The `Solution` of the whole from its `parts`' (only where there are parts)."""
         raise NotImplementedError(f"{type(self).__name__} has no parts to join")

@@ -69,18 +69,22 @@ def test_checked_judges_a_diffrax_run_both_ways():
 
 def test_a_checked_batch_runs_its_run_and_companion_apart_with_each_cells_verdict(monkeypatch):
     """`run_batch` runs a checked batch's run and companion apart (`CheckedStepper.parts`, each in
-    its own passes: in one loop every step would cost both, the finished companion's too) and
-    joins them: every cell's summary, step count and verdict are those of its `simulate` (one
+    its own passes: in one loop every step would cost both, the finished companion's too), the
+    companion from the run's start (computed once), and joins them: every cell's summary, step count and verdict are those of its `simulate` (one
     loop, both states), with a strict accuracy that flags some cells."""
     from jaxrock.analyses import kernels
     from jaxrock.spring.checked import CheckedStepper
 
-    kinds = set()
-    advance = kernels.advance
+    from jaxrock.analyses import engine
+
+    kinds, started = set(), []
+    advance, init = kernels.advance, engine._init
     monkeypatch.setattr(kernels, "advance", lambda st, *a: kinds.add(type(st).__name__) or advance(st, *a))
+    monkeypatch.setattr(engine, "_init", lambda st, *a: started.append(st.integrator.rtol) or init(st, *a))
     ex, strict = grid(), Checked(GA5, accuracy=1e-5)
     batch, alone = jr.run_batch(MODEL, ex, strict), run(strict, ex)
     assert kinds == {"GeneralizedAlphaStepper"}  # no pass of the two in one loop
+    assert started and set(started) == {GA5.rtol}  # the companion starts from the run's start (`shared_start`)
     assert isinstance(MODEL.stepper(strict), CheckedStepper)
     names = jr.status_names(batch.status)
     assert np.array_equal(names, jr.status_names(alone.status)) and set(names.tolist()) == {"ok", "inaccurate"}, names
@@ -104,3 +108,18 @@ def test_checked_refuses_to_nest_and_the_rigid_model_refuses_it():
         Checked(Checked(GA5))
     with pytest.raises(jr.JaxrockInputError, match="RigidModel needs"):
         jr.simulate(jr.RigidModel(BLOCK), jr.RickerPulse(1.0, 3.0), integrator=Checked(GA5))
+
+
+def test_the_companion_starts_as_the_run_does_and_leaves_out_only_the_crossing_limit():
+    """What a batch's shared start rests on: generalized-α's companion (factor × the tolerances,
+    no `crossing` limit: the limit serves the run's derivatives) starts from the run's state bit
+    for bit (its ladder of tangent inverses included); a diffrax run's start is not claimed."""
+    checked = Checked(GA5)
+    assert checked.companion == GeneralizedAlpha(1e-4, 1e-4, crossing=None)
+    stepper = MODEL.stepper(checked)
+    assert stepper.shared_start
+    ex = grid(2)
+    run0, comp0 = jax.vmap(stepper.run.init)(ex), jax.vmap(stepper.companion.init)(ex)
+    for a, b in zip(jax.tree_util.tree_leaves(run0), jax.tree_util.tree_leaves(comp0), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    assert not MODEL.stepper(Checked(SpringIntegrator())).shared_start

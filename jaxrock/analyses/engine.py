@@ -28,6 +28,7 @@ from typing import Callable, Iterable
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from .._validate import JaxrockInputError
@@ -228,13 +229,27 @@ def cell_order(model: AbstractModel, excitations, batched: bool) -> np.ndarray:
     return np.argsort(np.where(np.isfinite(key), key, np.inf), kind="stable")
 
 
-def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh, order: np.ndarray) -> Solution:
+def _start(stepper: AbstractStepper, excitations, batched: bool, starts: dict | None, key, on_device: bool):
+    """`_init`'s (states, done flags); where a stepper's `parts` share their start (`starts`, a
+    dict), the first part's, kept under `key` (the share of cells) for the next (on an accelerator
+    a copy: the passes donate their states)."""
+    if starts is not None and key in starts:
+        kept = starts[key]
+        return jax.tree_util.tree_map(jnp.copy, kept) if on_device else kept
+    start = _init(stepper, excitations, batched)
+    if starts is not None:
+        starts[key] = jax.tree_util.tree_map(jnp.copy, start) if on_device else start
+    return start
+
+
+def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh, order: np.ndarray, starts: dict | None = None,
+               key=0) -> Solution:
     """Run a batch in passes (`Schedule.passes`), gathering the cells still running between
     passes (with `Schedule.lanes`, at most that many, the started ones first, so that a finished
     cell's place goes to the next): the same results as `simulate`, cell by cell. The running cells
     are taken in `order` (`cell_order`), in passes of at most `MAX_PASS` cells on a CPU. With a `mesh`
     each pass is sharded over its devices: passes are padded to a multiple of their number, and
-    `lanes` is per device."""
+    `lanes` is per device. `starts`, `key`: a start shared with other parts (`_start`)."""
     passes, smallest, lanes = stepper.schedule.passes, stepper.schedule.smallest_batch, stepper.schedule.lanes
     n_dev = 1 if mesh is None else mesh.size
     platform = (jax.devices()[0] if mesh is None else mesh.devices.flat[0]).platform
@@ -250,7 +265,7 @@ def _compacted(stepper: AbstractStepper, excitations, batched: bool, mesh, order
     dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
     dyn_s, static_s = eqx.partition(stepper, eqx.is_array)
     dyn_e, dyn_s = keep(dyn_e), keep(dyn_s)
-    state, done = _init(stepper, excitations, batched)
+    state, done = _start(stepper, excitations, batched, starts, key, on_device)
     state, done = keep(state), np.array(done)
     started = np.zeros(n, dtype=bool)
     used, k = 0, 0
@@ -340,14 +355,14 @@ def _host_devices(devices, n: int, smallest: int) -> list:
     return local[: min(len(local), n // smallest)]
 
 
-def _dealt(stepper: AbstractStepper, excitations, batched: bool, order: np.ndarray, devices: list) -> Solution:
+def _dealt(stepper: AbstractStepper, excitations, batched: bool, order: np.ndarray, devices: list, starts: dict | None = None) -> Solution:
     """A batch over a CPU's devices: its cells, in `order`, dealt to the devices in turn (so that
     each share spans every intensity and costs about the same), each share run by `_compacted` on
     its device from a thread of its own (`on_devices`): a CPU device's computations run on the
     thread that asks for them, so one thread uses one core (2 cores: 1.8-2.2x one thread on rigid
     and spring batches, benchmarks/bench_throughput.py). The shares are fixed by `order`, so the
     bits do not depend on the threads' timing; a cell's last bits are those of its share's batch
-    (`run_batch`: 1e-10)."""
+    (`run_batch`: 1e-10). `starts`: the parts' shared starts (`_start`), one per share."""
     k, n = len(devices), order.size
     shares = [order[g::k] for g in range(k)]
     dyn_e, static_e = eqx.partition(excitations, eqx.is_array)
@@ -359,7 +374,7 @@ def _dealt(stepper: AbstractStepper, excitations, batched: bool, order: np.ndarr
         idx = shares[g]
         with jax.default_device(device[0]):
             sub_s = eqx.combine(host(dyn_s, idx), static_s) if batched else shared
-            return _compacted(sub_s, eqx.combine(host(dyn_e, idx), static_e), batched, None, np.arange(idx.size))
+            return _compacted(sub_s, eqx.combine(host(dyn_e, idx), static_e), batched, None, np.arange(idx.size), starts, (g, k))
 
     parts: dict[int, Solution] = {}
     on_devices(run, range(k), devices, parts.__setitem__)
@@ -404,17 +419,19 @@ def run_batch(
     return _flag(sol, ok)
 
 
-def _execute(stepper: AbstractStepper, excitations, batched: bool, order, devices) -> Solution:
-    """A batch's `Solution`s through `stepper`: each of its `parts` apart, joined; else in passes
+def _execute(stepper: AbstractStepper, excitations, batched: bool, order, devices, starts: dict | None = None) -> Solution:
+    """A batch's `Solution`s through `stepper`: each of its `parts` apart (from one start computed
+    once where they share it, `AbstractStepper.shared_start`), joined; else in passes
     (`Schedule.passes`: dealt over a CPU's devices or compacted on one device or mesh), else as one
     vmapped solve. `order()`: the cells' order (`cell_order`)."""
     if stepper.parts:
-        sols = tuple(_execute(part, excitations, batched, order, devices) for part in stepper.parts)
+        starts = {} if stepper.shared_start else None
+        sols = tuple(_execute(part, excitations, batched, order, devices, starts) for part in stepper.parts)
         return _join(stepper, excitations, sols, batched)
     if not stepper.schedule.passes:
         return _solve(stepper, excitations, batched)
     order = order()
     cores = _host_devices(devices, order.size, stepper.schedule.smallest_batch)
     if len(cores) > 1:
-        return _dealt(stepper, excitations, batched, order, cores)
-    return _compacted(stepper, excitations, batched, mesh_of(devices), order)
+        return _dealt(stepper, excitations, batched, order, cores, starts)
+    return _compacted(stepper, excitations, batched, mesh_of(devices), order, starts)
