@@ -111,11 +111,14 @@ def test_checked_refuses_to_nest_and_the_rigid_model_refuses_it():
 
 
 def test_the_companion_starts_as_the_run_does_and_leaves_out_only_the_crossing_limit():
-    """What a batch's shared start rests on: generalized-α's companion (factor × the tolerances,
-    no `crossing` limit: the limit serves the run's derivatives) starts from the run's state bit
-    for bit (its ladder of tangent inverses included); a diffrax run's start is not claimed."""
+    """What a batch's shared start rests on: generalized-α's companion (factor × the tolerances; on
+    a flexible column no `crossing` limit, which serves the run's derivatives; the one-DOF body
+    keeps it) starts from the run's state bit for bit (its ladder of tangent inverses included); a
+    diffrax run's start is not claimed."""
     checked = Checked(GA5)
-    assert checked.companion == GeneralizedAlpha(1e-4, 1e-4, crossing=None)
+    assert checked.companion == GeneralizedAlpha(1e-4, 1e-4)
+    assert checked.companion_for(MODEL.system()) == GeneralizedAlpha(1e-4, 1e-4, crossing=None)
+    assert checked.companion_for(SpringModel(BLOCK).system()) == GeneralizedAlpha(1e-4, 1e-4)
     stepper = MODEL.stepper(checked)
     assert stepper.shared_start
     ex = grid(2)
