@@ -32,6 +32,11 @@ class AbstractExcitation(eqx.Module):
         """Valid ranges of the parameters (`jaxrock._validate.Limit`); none by default."""
         return ()
 
+    def scaled(self, factor) -> "AbstractExcitation":
+        """The same excitation with its accelerations multiplied by `factor` (traceable: a run's
+        sensitivity differentiates with respect to it, `jaxrock.sensitivity`)."""
+        raise NotImplementedError(f"{type(self).__name__} does not say how to scale it (AbstractExcitation.scaled)")
+
     @abc.abstractmethod
     def __call__(self, t) -> Float[Array, ""]:
         """üg(t) in m/s²."""
@@ -118,6 +123,10 @@ class AbstractRicker(AbstractExcitation):
 
     def __call__(self, t):
         return self.a_p * self.shape(self.omega_p * t)
+
+    def scaled(self, factor) -> "AbstractRicker":
+        """The same pulse at `factor` × a_p."""
+        return eqx.tree_at(lambda e: e.a_p, self, self.a_p * jnp.asarray(factor, dtype=float))
 
     @property
     def t_start(self):
@@ -232,6 +241,9 @@ class StillGround(AbstractExcitation):
 
     def __call__(self, t):
         return jnp.zeros_like(jnp.asarray(t, dtype=float))
+
+    def scaled(self, factor) -> "StillGround":
+        return self
 
     @property
     def t_start(self):

@@ -150,6 +150,11 @@ class AbstractStepper(eqx.Module):
         costs every part's step, the finished ones' too."""
         return ()
 
+    def motion(self, state: PyTree) -> tuple[Float[Array, ""], Float[Array, ""], Float[Array, ""]]:
+        """(t, θ/α′, θ̇/α′) of a state: its time and base rotation (a run's sensitivity follows
+        their tangents, `jaxrock.sensitivity`)."""
+        raise NotImplementedError(f"{type(self).__name__} does not expose its motion (AbstractStepper.motion)")
+
     @property
     def shared_start(self) -> bool:
         """Whether every one of the `parts` starts from the same state (`init`, bit for bit): the
@@ -294,6 +299,7 @@ def simulate(
     integrator: AbstractIntegrator | None = None,
     save: Save | None = None,
     t1=None,
+    sensitivity: bool = False,
 ) -> Solution:
     """Simulate one scene. A pure function: `jax.vmap` and `jax.grad` accept it.
 
@@ -305,8 +311,17 @@ def simulate(
     - A parameter outside its limits (`limits()` of the block, model and excitation) is refused
       at construction; under `jax.vmap`/`jax.jit`, where it cannot be, the run returns
       `Status.invalid_input` with NaN numbers.
+    - With `sensitivity=True` the run carries the tangent of its motion along the excitation's
+      log-scale and reports `Solution.sensitivity` (`jaxrock.sensitivity`; forward mode: without
+      `integrator`, the model's forward-mode default).
     """
+    if sensitivity:
+        from .sensitivity import forward_integrator
+
+        integrator = forward_integrator(model, integrator)
     args = scene_arguments(model, excitation, integrator=integrator, save=save, t1=t1)
+    if sensitivity:
+        return run_scene(*args, sensitivity=True)
     if _in_reverse_mode() and not _checkpointed(*args):  # JAX would fail later, in its backward pass, in its own words
         raise JaxrockInputError(_autodiff_advice("Reverse-mode differentiation does not work for lax.while_loop", model, args[2]))
     try:
@@ -396,12 +411,17 @@ def scene_arguments(model: AbstractModel, excitation: AbstractExcitation, *, int
 
 
 @eqx.filter_jit
-def run_scene(model, excitation, integrator, save, t1) -> Solution:
-    """One scene's run on checked arguments (`scene_arguments`). Compiled once per structure
-    (model kind, mesh, save request): repeated calls with new numbers reuse it. Composes with an
-    outer jit, vmap and grad."""
+def run_scene(model, excitation, integrator, save, t1, sensitivity: bool = False) -> Solution:
+    """One scene's run on checked arguments (`scene_arguments`), with its sensitivity where asked
+    (`jaxrock.sensitivity`). Compiled once per structure (model kind, mesh, save request): repeated
+    calls with new numbers reuse it. Composes with an outer jit, vmap and grad."""
     model, excitation, ok = guard_scene(model, excitation)
-    return flag_invalid(model.stepper(integrator, save, t1).solve(excitation), ok)
+    stepper = model.stepper(integrator, save, t1)
+    if sensitivity:
+        from .sensitivity import Sensitivity
+
+        stepper = Sensitivity(stepper)
+    return flag_invalid(stepper.solve(excitation), ok)
 
 
 def guard_scene(model: AbstractModel, excitation: AbstractExcitation):

@@ -52,7 +52,9 @@ class Output(NamedTuple):
             return f"{self.label}: {int(x)}"
         if self.units == "s":
             return f"{self.label}: {f't = {float(x):.4f} s' if np.isfinite(x) else 'never'}"
-        return f"{self.label} = {float(x):.6f}"
+        if self.absent is not None and np.isnan(self.absent) and np.isnan(x):
+            return f"{self.label}: not computed"
+        return f"{self.label} = {float(x):.6f}" if abs(float(x)) < 1e4 else f"{self.label} = {float(x):.6g}"
 
     def invalid(self, x, ok):
         """`x` where `ok`, else what an invalid scene reports (NaN, no, or the absent value)."""
@@ -73,6 +75,8 @@ SUMMARY: tuple[Output, ...] = (
     Output("uplifted", "uplifted", "the body left its rest state (|theta| passed the uplift rotation)", "1", "bool"),
     Output("t_uplift", "uplifted at", "first time |theta| passed the uplift rotation (+inf: never)", "s", "float"),
     Output("n_impacts", "impacts", "impacts at theta = 0 (the rigid model's; 0 for spring models)", "1", "int", absent=0),
+    Output("sensitivity", "sensitivity", "max over the run of |d theta/d ln(scale)|/alpha', the tangent of the motion along the "
+           "excitation's log-scale (jaxrock.sensitivity; NaN: not asked for)", "1", "float", absent=float("nan")),
 )
 OUTPUTS = {o.name: o for o in SUMMARY}
 RESULT_COLUMNS: tuple[str, ...] = (*OUTPUTS, "status")  # a results row: the summary, then the status name

@@ -128,7 +128,7 @@ def test_batch_round_trip_and_resume(tmp_path):
     with open(res) as fh:
         lines = fh.read().splitlines()
     kept = lines[2].split(",")
-    kept[-7] = "0.123456"  # max_theta
+    kept[lines[0].split(",").index("max_theta")] = "0.123456"
     write(res, lines[0] + "\n" + ",".join(kept) + "\n" + "1,a,10")  # + a partly written line
     r = invoke("batch", scenes, res, "--resume", "--quiet")
     assert r.exit_code == 0, r.output

@@ -15,7 +15,7 @@ LAYERS = [
     ("analyses", ("analyses",)),
     ("input/output", ("io",)),
     ("models", ("rigid", "spring")),
-    ("protocol", ("model", "bookkeeping")),
+    ("protocol", ("model", "bookkeeping", "sensitivity")),
     ("values", ("geometry", "excitation", "results", "intensity")),
     ("vocabulary", ("scene", "outputs")),  # words and defaults, without JAX
     ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "cache", "runtime", "__init__")),

@@ -37,6 +37,7 @@ def _spectrum(shift=0.0, status_bad=False):
     return Spectrum(
         omega_ratio=w, accel_ratio=a, max_theta=theta, overturned=over, uplifted=uplifted, status=status,
         t_overturn=np.where(over, 1.0, np.inf), t_uplift=np.where(uplifted, 0.0, np.inf), n_impacts=np.zeros(A.shape, np.int64),
+        sensitivity=np.full(A.shape, np.nan),
         attrs={"model": "RigidModel", "tan_alpha": 0.2, "height": 10.0, "pulse": "RickerPulse", "alpha": 0.197, "p": 1.2},
     )
 
@@ -127,7 +128,8 @@ def test_plot_history_draws_theta_over_alpha_and_ground_motion(tmp_path):
     theta = 0.1 * np.sin(ts)
     sol = jr.Solution(
         max_theta=np.float64(0.5), overturned=np.bool_(True), t_overturn=np.float64(2.0), uplifted=np.bool_(True),
-        t_uplift=np.float64(-0.5), n_impacts=np.int32(1), status=jr.Status.ok, ts=ts, history={"theta": theta},
+        t_uplift=np.float64(-0.5), n_impacts=np.int32(1), sensitivity=np.float64(np.nan), status=jr.Status.ok, ts=ts,
+        history={"theta": theta},
     )
     exc = jr.RickerPulse(3.0, 4.0)
     alpha = 0.2
@@ -142,7 +144,7 @@ def test_plot_history_draws_theta_over_alpha_and_ground_motion(tmp_path):
     plt.close(fig)
     no_hist = jr.Solution(
         max_theta=np.float64(0.5), overturned=np.bool_(False), t_overturn=np.float64(np.inf), uplifted=np.bool_(True),
-        t_uplift=np.float64(0.0), n_impacts=np.int32(1), status=jr.Status.ok,
+        t_uplift=np.float64(0.0), n_impacts=np.int32(1), sensitivity=np.float64(np.nan), status=jr.Status.ok,
     )
     with pytest.raises(ValueError, match="time history"):
         plot_history(no_hist, exc)

@@ -426,7 +426,7 @@ def test_same_batch_gives_the_same_bits_twice(run_batch):
     first = jax.device_get(run_batch(stack(ms), stack(es), DEFAULT))
     second = jax.device_get(run_batch(stack(ms), stack(es), DEFAULT))
     for a, b in zip(jax.tree_util.tree_leaves(first), jax.tree_util.tree_leaves(second)):
-        assert np.array_equal(np.asarray(a), np.asarray(b))
+        assert np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)  # NaN: an output not asked for
 
 
 # Cells of the benchmark's 64 × 64 spectrum (tanα = 0.2, 2h = 10 m, damped, symmetric pulse) that

@@ -34,6 +34,7 @@ import numpy as np
 from .._validate import JaxrockInputError
 from ..excitation import AbstractExcitation
 from ..model import AbstractIntegrator, AbstractModel, AbstractStepper, flag_invalid, guard_scene
+from ..sensitivity import Sensitivity, forward_integrator
 from ..results import Solution
 from . import kernels
 from .kernels import vmap_scenes as _vmap
@@ -154,12 +155,14 @@ _flag = eqx.filter_jit(eqx.filter_vmap(flag_invalid))  # `flag_invalid`, scene b
 
 
 @eqx.filter_jit
-def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_batched: bool) -> AbstractStepper:
-    """The summary stepper of `model` (of each model, vmapped, when `model_batched`): what a model
-    prepares once (mass matrices, tangents, preloads) is computed once for the whole batch."""
+def make_stepper(model: AbstractModel, integrator: AbstractIntegrator, model_batched: bool, sensitivity: bool = False) -> AbstractStepper:
+    """The summary stepper of `model` (of each model, vmapped, when `model_batched`), with its
+    sensitivity where asked (`jaxrock.sensitivity.Sensitivity`): what a model prepares once (mass
+    matrices, tangents, preloads) is computed once for the whole batch."""
+    make = (lambda m: Sensitivity(m.stepper(integrator))) if sensitivity else (lambda m: m.stepper(integrator))
     if model_batched:
-        return eqx.filter_vmap(lambda m: m.stepper(integrator))(model)
-    return model.stepper(integrator)
+        return eqx.filter_vmap(make)(model)
+    return make(model)
 
 
 # `_init` and `kernels.advance` return the states with their done flags: the host loop reads the flags
@@ -395,6 +398,7 @@ def run_batch(
     *,
     model_batched: bool = False,
     devices=None,
+    sensitivity: bool = False,
 ) -> Solution:
     """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
     and so does `model` when `model_batched` (one model per scene; else one model for all).
@@ -409,11 +413,15 @@ def run_batch(
     last bits: XLA compiles each batch shape to its own fused kernels, whose floating-point
     rounding differs, and the impact times are root finds that stop anywhere inside their
     tolerance (`root_tol`, 1e-13 s). Issue 52's hostile-input campaign saw 2.4e-12 at most in θ/α
-    and in t_overturn [s]; `tests/test_batch.py` holds them to 1e-10."""
-    integ = model.default_integrator() if integrator is None else integrator
+    and in t_overturn [s]; `tests/test_batch.py` holds them to 1e-10.
+
+    `sensitivity=True`: each run carries the tangent of its motion along the excitation's log-scale
+    and reports `Solution.sensitivity` (`jaxrock.sensitivity`; forward mode: without `integrator`,
+    the model's forward-mode default)."""
+    integ = forward_integrator(model, integrator) if sensitivity else model.default_integrator() if integrator is None else integrator
     _check_batch_sizes(model, excitations, model_batched)
     model, excitations, ok = _guard(model, excitations, model_batched)
-    stepper = make_stepper(model, integ, model_batched)
+    stepper = make_stepper(model, integ, model_batched, sensitivity)
     order = functools.cache(lambda: cell_order(model, excitations, model_batched))  # once, for every part
     sol = _execute(stepper, excitations, model_batched, order, devices)
     return _flag(sol, ok)

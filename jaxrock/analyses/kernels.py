@@ -144,9 +144,13 @@ def advance(stepper, excitations, state, n, batched: bool, mesh=None):
     with _MAKING:  # chunks and shares run from several threads (`engine.on_devices`): one trace per structure
         kernel = _KERNELS.get((structure, mesh))
         if kernel is None:
-            exported = _advance_kernel(structure, (leaves_s, leaves_e, leaves_c, n), (static_s, static_e))
-            kernel = _KERNELS[(structure, mesh)] = jax.jit(exported.call) if mesh is None else _sharded(exported, mesh, batched, leaves_s,
-                                                                                                           leaves_e, leaves_c)
+            try:
+                call = _advance_kernel(structure, (leaves_s, leaves_e, leaves_c, n), (static_s, static_e)).call
+            except NotImplementedError as e:  # a pass with a host callback cannot be exported: compiled for this process
+                if "host_callback" not in str(e):  # (equinox's runtime checks in optimistix's implicit derivative of an
+                    raise  # event's root find, under a sensitivity's `jvp`: `jaxrock.sensitivity`)
+                call = functools.partial(_pass, trees=structure[1:4], statics=(static_s, static_e), batched=batched)
+            kernel = _KERNELS[(structure, mesh)] = jax.jit(call) if mesh is None else _sharded(call, mesh, batched, leaves_s, leaves_e, leaves_c)
     if mesh is not None:
         cells = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("scenes"))
         leaves_s = jax.device_put(leaves_s, cells) if batched else leaves_s
@@ -155,11 +159,11 @@ def advance(stepper, excitations, state, n, batched: bool, mesh=None):
     return jax.tree_util.tree_unflatten(tree_c, leaves), done
 
 
-def _sharded(exported, mesh, batched, leaves_s, leaves_e, leaves_c):
-    """The exported pass over `mesh`: each device runs the one-device kernel on its block of cells
+def _sharded(call, mesh, batched, leaves_s, leaves_e, leaves_c):
+    """The pass `call` (an exported kernel's) over `mesh`: each device runs the one-device kernel on its block of cells
     (the blocks of the inputs' `NamedSharding`), dispatched to all devices before any is awaited;
     the outputs are assembled into arrays of the same sharding."""
-    call = jax.jit(exported.call)
+    call = jax.jit(call)
     cells = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("scenes"))
 
     def run(ls, le, lc, n):

@@ -203,6 +203,10 @@ class RigidStepper(AbstractStepper):
     def summary_only(self) -> bool:
         return self.save is None
 
+    def motion(self, state):
+        a = self.model.block.alpha_r
+        return state.t, state.theta / a, state.theta_dot / a
+
     def _scene(self, exc: AbstractExcitation) -> _Scene:
         model, block = self.model, self.model.block
         p = block.p_r

@@ -236,6 +236,10 @@ class DiffraxSpringStepper(AbstractStepper):
     def done(self, c: _Carry):
         return c.phase == _FINISHED
 
+    def motion(self, c: _Carry):
+        a = self.system.alpha_r
+        return c.t, c.y[0] / a, c.y[self.system.ndof] / a
+
     def finish(self, excitation, c: _Carry) -> Solution:
         status = Status.where(c.phase == _FINISHED, c.status, Status.max_iterations)
         return self.model.watch(self.system).solution(c.rec, status, n_iterations=c.n_steps)

@@ -167,6 +167,10 @@ class GeneralizedAlphaStepper(AbstractStepper):
     def done(self, c):
         return c["done"] | (c["steps"] >= self.max_steps)
 
+    def motion(self, c):
+        a = self.system.alpha_r
+        return c["t"], c["q"][0] / a, c["v"][0] / a
+
     def finish(self, exc, c) -> Solution:
         out = self._loop(exc)[2](c)
         return self.model.watch(self.system).solution(out["record"], out["status"], ts=None if self.save is None else self.save.ts,

@@ -1,0 +1,110 @@
+"""A run's sensitivity: how fast its motion forgets where it started (issue 55).
+
+Rocking under a long record is chaotic in places: two runs that differ in the last bits of the
+excitation's scale, or of the solver's steps, rock alike for a while and then diverge
+exponentially, and the verdict (overturned or not) may be decided by rounding. The tangent of the
+motion says so cheaply. `Sensitivity(stepper)` runs any stepper with the tangent of its state with
+respect to the logarithm of the excitation's scale, s = ln(scale) (forward mode, `jax.jvp` of each
+loop step: one pass, the tangent carried beside the state), and reports
+
+    sensitivity = max over the run of |∂θ/∂ln(scale)| / α′,
+
+sampled at the ends of the stepper's loop steps (a rigid segment or window of `chunk_steps` steps, a
+generalized-α block). Its size says what a relative perturbation δ of the scale (or an error of the
+same size anywhere in the run, which the motion amplifies alike) can do: the rotation moves by
+about δ × sensitivity of α′. A short pulse gives O(1) values (the response is smooth in the scale);
+a chaotic record run grows like exp(λt), λ the finite-time Lyapunov exponent, to 10⁸ and beyond in
+40 s.
+
+The stepper must be forward-mode differentiable (`AbstractStepper.checkpointed` False, or a diffrax
+integrator with `autodiff="forward"`); `simulate(..., sensitivity=True)` and `run_batch(...,
+sensitivity=True)` take the model's forward-mode default where no integrator is given.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ._validate import JaxrockInputError
+from .model import AbstractIntegrator, AbstractModel, AbstractStepper, Schedule
+from .results import Solution
+
+
+def forward_integrator(model: AbstractModel, integrator: AbstractIntegrator | None) -> AbstractIntegrator:
+    """The integrator of a run with its sensitivity: `integrator` where it differentiates in
+    forward mode (its own `autodiff`, or the wrapped one's for `Checked`; generalized-α always
+    does), the model's forward-mode default where None; a reverse-mode one is refused."""
+    if integrator is None:
+        return model.default_integrator(autodiff="forward")
+    inner = getattr(integrator, "integrator", integrator)  # `Checked` wraps one
+    if getattr(inner, "autodiff", "forward") != "forward":
+        raise JaxrockInputError(f"sensitivity needs a forward-mode integrator: {type(inner).__name__}(autodiff='forward'), "
+                                "or leave the integrator out (the model's forward-mode default)")
+    return integrator
+
+
+def _tangent(fn, *primals):
+    """`fn(1, *primals)` and its tangent along the first argument (the scale factor, at 1) and the
+    tangents `primals`' second halves: `primals` are (value, tangent) pairs."""
+    one = jnp.ones(())
+    values, tangents = zip(*primals) if primals else ((), ())
+    return jax.jvp(fn, (one, *values), (one, *tangents))
+
+
+class Sensitivity(AbstractStepper):
+    """`stepper` run with the tangent of its state along ln(scale) (module docstring); its
+    `Solution` is the stepper's with `sensitivity` set. The state is (the stepper's state, its
+    tangent, the largest |∂θ/∂ln scale|/α′ so far). A stepper with `parts` (`Checked`) follows its
+    first part's tangent (the run; the companion only judges it)."""
+
+    stepper: AbstractStepper
+
+    @property
+    def max_steps(self) -> int:
+        return self.stepper.max_steps
+
+    @property
+    def checkpointed(self) -> bool:
+        return False  # forward mode through the loop
+
+    @property
+    def schedule(self) -> Schedule:
+        s = self.stepper.schedule
+        return s._replace(bytes_per_scene=2 * s.bytes_per_scene)  # the tangent beside the state
+
+    def _slope(self, state, tangent):
+        """|∂θ/∂ln scale|/α′ at the state's time: the state's own tangent less the part that its
+        time's carries (a loop step ending on an event, an impact, ends when the event does: at
+        t + δt, where the rotation is off by θ̇ δt)."""
+        _, _, omega = self.stepper.motion(state)
+        dt, dtheta, _ = self.stepper.motion(tangent)
+        return jnp.abs(dtheta - omega * dt)
+
+    def init(self, excitation):
+        state, tangent = _tangent(lambda k: self.stepper.init(excitation.scaled(k)))
+        return state, tangent, self._slope(state, tangent)
+
+    def step(self, excitation, state):
+        state, tangent, most = state
+        state, tangent = _tangent(lambda k, s: self.stepper.step(excitation.scaled(k), s), (state, tangent))
+        return state, tangent, jnp.maximum(most, self._slope(state, tangent))
+
+    def done(self, state):
+        return self.stepper.done(state[0])
+
+    def motion(self, state):
+        return self.stepper.motion(state[0])
+
+    def finish(self, excitation, state) -> Solution:
+        sol = self.stepper.finish(excitation, state[0])
+        return eqx.tree_at(lambda s: s.sensitivity, sol, state[2].astype(sol.max_theta.dtype))
+
+    @property
+    def parts(self) -> tuple[AbstractStepper, ...]:
+        parts = self.stepper.parts
+        return (Sensitivity(parts[0]), *parts[1:]) if parts else ()
+
+    def join(self, excitation, solutions) -> Solution:
+        return eqx.tree_at(lambda s: s.sensitivity, self.stepper.join(excitation, solutions), solutions[0].sensitivity)

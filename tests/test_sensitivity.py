@@ -1,0 +1,104 @@
+"""A run's sensitivity, max |∂θ/∂ln(scale)|/α′ along the run (`jaxrock.sensitivity`, issue 55 item 1)."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrock as jr
+from jaxrock.io.records import el_centro
+from jaxrock.spring import Column, GeneralizedAlpha, SpringModel
+
+G = 9.81
+BLOCK = jr.Block.from_slenderness(3.0, 0.2)
+RM = jr.RigidModel(BLOCK)
+
+
+def pulse(ar, wr, block=BLOCK, kind=jr.RickerPulse):
+    return kind(ar * G * float(block.tan_alpha), wr * float(block.p_r))
+
+
+def same_summary(a, b):
+    """The run with its tangent gives the plain run's summary: the same verdicts and statuses, the
+    same numbers to their last bits but for the rounding of another compiled program (the primal
+    under `jvp`: 1e-14 relative on the flexible column)."""
+    for name in ("overturned", "uplifted", "n_impacts"):
+        np.testing.assert_array_equal(np.asarray(getattr(a, name)), np.asarray(getattr(b, name)), err_msg=name)
+    for name in ("max_theta", "t_overturn", "t_uplift"):
+        np.testing.assert_allclose(np.asarray(getattr(a, name)), np.asarray(getattr(b, name)), rtol=1e-12, err_msg=name)
+    assert np.array_equal(jr.status_codes(a.status), jr.status_codes(b.status))
+
+
+@pytest.mark.parametrize("ar, wr, kind", [(2.0, 3.0, jr.RickerPulse), (3.0, 5.0, jr.AntisymmetricRickerPulse)])
+def test_the_sensitivity_is_the_slope_of_the_motion_in_the_scale(ar, wr, kind):
+    """A history run to four rocking periods after the pulse, against central differences of its
+    history in the pulse's amplitude (ln scale ± 1e-6): the largest |Δθ|/(2δ α′) over a fine time
+    grid bounds the tangent sampled at the loop steps' ends from above (to the differences' error)
+    and is reached within 15 %. The summary run (which stops once its answer is fixed) reports the
+    plain run's summary."""
+    ex = pulse(ar, wr, kind=kind)
+    same_summary(jr.simulate(RM, ex, sensitivity=True), jr.simulate(RM, ex))
+    ts = jnp.linspace(float(ex.t_start), float(ex.t_end) + 4 * 2 * math.pi / float(BLOCK.p_r), 4000)
+    save = jr.Save(ts, ("theta",))
+    s = jr.simulate(RM, ex, save=save, sensitivity=True)
+    d = 1e-6
+    th = [jr.simulate(RM, ex.scaled(math.exp(k * d)), save=save).history["theta"] for k in (1, -1)]
+    slope = np.max(np.abs(np.asarray(th[0]) - np.asarray(th[1]))) / (2 * d) / float(BLOCK.alpha_r)
+    assert 0.0 < float(s.sensitivity) <= slope * 1.01, (float(s.sensitivity), slope)
+    assert float(s.sensitivity) >= 0.85 * slope, (float(s.sensitivity), slope)
+
+
+def test_a_chaotic_record_run_is_sensitive_and_a_short_pulse_is_not():
+    """El Centro on a 3 m block (tanα 0.2) at 2.5× its uplift factor rocks to 0.886 α without
+    overturning, its tangent grown to ~5e8 (a perturbation of 1e-9 of the scale moves θ by ~0.5 α:
+    the verdict is not determined); a Ricker pulse's stays O(1). Either way the summary is the
+    plain run's, bit for bit."""
+    rec = el_centro()
+    run = rec.scaled(2.5 * G * 0.2 / float(jnp.max(jnp.abs(rec.acc))))
+    s = jr.simulate(RM, run, sensitivity=True)
+    same_summary(s, jr.simulate(RM, run))
+    assert not bool(s.overturned) and float(s.sensitivity) > 1e7, float(s.sensitivity)
+    short = jr.simulate(RM, pulse(2.0, 3.0), sensitivity=True)
+    assert float(short.sensitivity) < 10.0
+
+
+def test_a_batch_reports_each_runs_sensitivity_as_simulate_does():
+    """`run_batch(sensitivity=True)` (its passes gather the running cells: the tangent travels with
+    the state) gives every cell `simulate`'s summary and sensitivity; a block at rest has 0."""
+    ex = jr.RickerPulse(jnp.linspace(0.5, 4.0, 12) * G * 0.2, jnp.linspace(2.0, 8.0, 12) * float(BLOCK.p_r))
+    batch = jr.run_batch(RM, ex, sensitivity=True)
+    alone = jax.vmap(lambda e: jr.simulate(RM, e, sensitivity=True))(ex)
+    np.testing.assert_allclose(np.asarray(batch.sensitivity), np.asarray(alone.sensitivity), rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(batch.max_theta), np.asarray(alone.max_theta), rtol=1e-10, atol=1e-12)
+    at_rest = ~np.asarray(batch.uplifted)
+    assert at_rest.any() and np.all(np.asarray(batch.sensitivity)[at_rest] == 0.0)
+    assert np.all(np.asarray(batch.sensitivity)[~at_rest] > 0.0)
+
+
+@pytest.mark.parametrize("model, integrator", [
+    (SpringModel(BLOCK), None),  # the forward-mode Tsit5 default
+    (SpringModel(BLOCK), GeneralizedAlpha(1e-6, 1e-6)),
+    (SpringModel(jr.Block.from_size(50.0, 5.0), Column.concrete(), n_elements=4), None),  # Checked generalized-α
+])
+def test_the_spring_models_report_it_too(model, integrator):
+    """The quasi-rigid and flexible spring models: an uplifting pulse's sensitivity is finite and
+    positive, near the rigid model's on the same block (the quasi-rigid body rocks as the rigid
+    one), and the summary is the plain run's."""
+    ex = pulse(2.0, 3.0, model.block)
+    s = jr.simulate(model, ex, integrator=integrator, sensitivity=True)
+    same_summary(s, jr.simulate(model, ex, integrator=integrator))
+    assert 0.0 < float(s.sensitivity) < 1e3
+    if model.column is None:
+        rigid = jr.simulate(jr.RigidModel(model.block), ex, sensitivity=True)
+        assert abs(float(s.sensitivity) / float(rigid.sensitivity) - 1) < 0.2, (float(s.sensitivity), float(rigid.sensitivity))
+
+
+def test_it_is_asked_for_and_needs_forward_mode():
+    """Not asked: NaN (not computed). A reverse-mode integrator is refused with one clear line."""
+    assert math.isnan(float(jr.simulate(RM, pulse(2.0, 3.0)).sensitivity))
+    with pytest.raises(jr.JaxrockInputError, match="forward-mode"):
+        jr.simulate(RM, pulse(2.0, 3.0), integrator=jr.EventIntegrator(), sensitivity=True)
+    with pytest.raises(jr.JaxrockInputError, match="forward-mode"):
+        jr.run_batch(RM, jr.RickerPulse(jnp.ones(2), jnp.ones(2) * 6.0), jr.EventIntegrator(), sensitivity=True)
