@@ -151,6 +151,8 @@ def _grid_line(o, values) -> str:
         return f"{o.label}: {int(values.sum())} cells ({100 * values.mean():.1f} %)"
     fin = values[np.isfinite(values)]
     unit = "" if o.units == "1" else f" {o.units}"
+    if not fin.size and o.absent is not None and np.isnan(o.absent) and np.isnan(values).all():
+        return f"{o.label}: not computed"
     return f"{o.label}: " + (f"{fin.min():.4g} … {fin.max():.4g}{unit}" if fin.size else "none")
 
 
