@@ -102,3 +102,19 @@ def test_it_is_asked_for_and_needs_forward_mode():
         jr.simulate(RM, pulse(2.0, 3.0), integrator=jr.EventIntegrator(), sensitivity=True)
     with pytest.raises(jr.JaxrockInputError, match="forward-mode"):
         jr.run_batch(RM, jr.RickerPulse(jnp.ones(2), jnp.ones(2) * 6.0), jr.EventIntegrator(), sensitivity=True)
+
+
+@pytest.mark.slow
+def test_a_checked_batch_follows_its_runs_tangent():
+    """A flexible column's `Checked` default in a batch: the run (the first of its `parts`) carries
+    the tangent, the companion judges it; every cell's sensitivity, status and summary are those of
+    `simulate` (one loop of both)."""
+    model = SpringModel(jr.Block.from_size(50.0, 5.0), Column.concrete(), n_elements=4)
+    ex = jr.RickerPulse(jnp.array([2.0, 3.0, 4.0, 2.5]) * G * float(model.block.tan_alpha),
+                        jnp.array([2.0, 3.0, 5.0, 4.0]) * float(model.block.p_r))
+    batch = jr.run_batch(model, ex, sensitivity=True)
+    alone = jax.vmap(lambda e: jr.simulate(model, e, sensitivity=True))(ex)
+    np.testing.assert_allclose(np.asarray(batch.sensitivity), np.asarray(alone.sensitivity), rtol=1e-8)
+    np.testing.assert_allclose(np.asarray(batch.max_theta), np.asarray(alone.max_theta), rtol=1e-10, atol=1e-12)
+    assert np.array_equal(jr.status_codes(batch.status), jr.status_codes(alone.status))
+    assert np.all(np.asarray(batch.sensitivity) > 0)
