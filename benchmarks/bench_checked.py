@@ -26,21 +26,20 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import math
 import platform
 import sys
-import time
 from pathlib import Path
 
 import jax
 import numpy as np
 
 import jaxrock as jr
-from jaxrock import AntisymmetricRickerPulse, GeneralizedAlpha, RickerPulse
+from jaxrock import GeneralizedAlpha
 from jaxrock.spring.base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_backbone import batch, describe, sample  # noqa: E402  (the scene set of the backbone study)
+from bench_backbone import describe, sample  # noqa: E402  (the scene set of the backbone study)
+from bench_backbone import run as backbone_run  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 LINES: list[str] = []
@@ -53,26 +52,8 @@ def out(line: str = "") -> None:
 
 
 def run(scenes, integrator, timed=False):
-    """max θ/α (overturned: 1) and status of every scene, and seconds per scene (best of two warm calls)."""
-    theta = np.full(scenes["ar"].size, np.nan)
-    status = np.zeros(scenes["ar"].size, int)
-    seconds = 0.0
-    for anti in (False, True):
-        idx = np.flatnonzero(scenes["anti"] == anti)
-        models, (a_p, w_p) = batch(scenes, idx, True, DEFAULT_BACKBONE, DEFAULT_SMOOTHING)
-        pulses = (AntisymmetricRickerPulse if anti else RickerPulse)(a_p, w_p)
-        go = lambda: jax.block_until_ready(jr.run_batch(models, pulses, integrator, model_batched=True))
-        sol = go()
-        if timed:
-            best = math.inf
-            for _ in range(2):
-                t = time.perf_counter()
-                go()
-                best = min(best, time.perf_counter() - t)
-            seconds += best
-        theta[idx] = np.asarray(sol.max_theta)
-        status[idx] = np.asarray(jr.status_codes(sol.status))
-    return theta, status, seconds / scenes["ar"].size
+    """max θ/α, status and seconds per scene of every scene with the default spring (`bench_backbone.run`)."""
+    return backbone_run(scenes, True, DEFAULT_BACKBONE, DEFAULT_SMOOTHING, integrator, timed)
 
 
 def main() -> None:
