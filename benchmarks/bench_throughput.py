@@ -13,6 +13,8 @@ stored kernels off, `JAXROCK_CACHE_DIR=off`):
 - Quasi-rigid SM (the same block, default integrator): 1024 random scenes; flexible SM (concrete,
   2h = 50 m, 2b = 5 m, 10 elements): 256 random scenes (`--spring-sizes`), with its default
   (`Checked`: the run and a companion) and the run alone.
+- Rows "with sensitivity": the same scenes with each run's tangent (`sensitivity=True`, issue 55;
+  the command line's spectrum and suite default), against the row before it.
 - Each row also counts the scenes that did not end `ok` (a valid random scene must).
 
 The same command runs on a lent GPU (`device`): the table names the device, and its rows are
@@ -115,8 +117,13 @@ def main() -> None:
 def rigid_rows(args, rng, block, sizes, grid) -> None:
     model = jr.RigidModel(block)
     wr, ar = np.linspace(1.0, 15.0, grid), np.linspace(0.5, 10.0, grid)
-    first, warm, spec = timed(lambda: jr.overturning_spectrum(model, omega_ratio=wr, accel_ratio=ar, progress=False), args.repeat)
-    row(f"RM overturning_spectrum {grid}x{grid} grid", grid * grid, first, warm, int(np.sum(np.asarray(spec.status) != 0)))
+    spec_us = None
+    for sens in (False, True):
+        first, warm, spec = timed(lambda: jr.overturning_spectrum(model, omega_ratio=wr, accel_ratio=ar, progress=False, sensitivity=sens),
+                                  args.repeat)
+        us = row(f"RM overturning_spectrum {grid}x{grid} grid" + (", with sensitivity (vs without)" if sens else ""), grid * grid,
+                 first, warm, int(np.sum(np.asarray(spec.status) != 0)), spec_us)
+        spec_us = us
     W, A = np.meshgrid(wr, ar)
     cells = jr.RickerPulse(jnp.asarray(A.ravel() * G * 0.2), jnp.asarray(W.ravel() * float(block.p_r)))
     first, warm, sol = timed(lambda: jr.run_batch(model, cells), args.repeat)
@@ -124,7 +131,10 @@ def rigid_rows(args, rng, block, sizes, grid) -> None:
     for n in sizes:
         exc = random_pulses(rng, n, block)
         first, warm, sol = timed(lambda: jr.run_batch(model, exc), args.repeat)
-        row(f"RM run_batch, {n} random scenes", n, first, warm, not_ok(sol), grid_us)
+        plain_us = row(f"RM run_batch, {n} random scenes", n, first, warm, not_ok(sol), grid_us)
+        if n == min(sizes):
+            first, warm, sol = timed(lambda: jr.run_batch(model, exc, sensitivity=True), args.repeat)
+            row(f"RM run_batch, {n} random scenes, with sensitivity (vs without)", n, first, warm, not_ok(sol), plain_us)
 
     # mixed blocks and pulse shapes, one model per scene
     n = min(min(sizes), 4096)
@@ -149,7 +159,10 @@ def spring_rows(rng, block, n_q, n_f, repeat) -> None:
                                  ("flexible SM, its run alone (no companion)", flexible, exc_f, flexible.default_integrator().integrator)):
         n = exc.a_p.shape[0]
         first, warm, sol = timed(lambda: jr.run_batch(sm, exc, integ), repeat)
-        row(f"{name}, {n} random scenes", n, first, warm, not_ok(sol))
+        plain_us = row(f"{name}, {n} random scenes", n, first, warm, not_ok(sol))
+        if integ is None:  # the default, with its tangent (forward mode: the model's forward-mode default)
+            first, warm, sol = timed(lambda: jr.run_batch(sm, exc, sensitivity=True), repeat)
+            row(f"{name.split(' (')[0]}, {n} random, with sensitivity (vs without)", n, first, warm, not_ok(sol), plain_us)
 
 
 if __name__ == "__main__":

@@ -36,6 +36,7 @@ _EXPORTS = {
     **dict.fromkeys(["AbstractIntegrator", "AbstractModel", "AbstractStepper", "AbstractSpringIntegrator", "Schedule", "simulate"],
                     "model"),
     **dict.fromkeys(["ModelKind", "register_model_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"], "scene"),
+    **dict.fromkeys(["Sensitivity", "verdict_uncertain"], "sensitivity"),
     **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
     **dict.fromkeys(["SpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear",
                      "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),

@@ -20,7 +20,9 @@ class Output(NamedTuple):
     - `label`: how the command line's summaries call it;
     - `meaning` (the netCDF long_name) and `units` (CF: "1" for ratios, flags and counts);
     - `kind`: "float", "bool" or "int";
-    - `absent`: its value from a model that does not compute it (None: every model does).
+    - `absent`: its value from a model that does not compute it (None: every model does);
+    - `needs`: the output it is computed with (None: none): where that one is not computed, neither
+      is this one (its `absent` value then means "not computed").
     """
 
     name: str
@@ -29,6 +31,7 @@ class Output(NamedTuple):
     units: str
     kind: str
     absent: float | bool | int | None = None
+    needs: str | None = None
 
     @property
     def dtype(self) -> type:
@@ -67,6 +70,9 @@ class Output(NamedTuple):
         return jnp.where(ok, x, jnp.asarray(0 if self.absent is None else self.absent, dtype=x.dtype))
 
 
+PERTURBATION = 1e-7  # δ: the relative perturbation of the scale that the `uncertain` flag answers for (jaxrock.sensitivity)
+MARGIN_OVERTURNED = 0.1  # an overturned run's margin to the other verdict [α′], chosen by benchmarks/study_uncertain.py
+
 SUMMARY: tuple[Output, ...] = (
     Output("max_theta", "max θ/α", "max |theta|/alpha' over the whole response (alpha' the rocking slenderness: alpha without "
            "a base): the exact peak; the threshold once overturned, never beyond it", "1", "float"),
@@ -77,9 +83,22 @@ SUMMARY: tuple[Output, ...] = (
     Output("n_impacts", "impacts", "impacts at theta = 0 (the rigid model's; 0 for spring models)", "1", "int", absent=0),
     Output("sensitivity", "sensitivity", "max over the run of |d theta/d ln(scale)|/alpha', the tangent of the motion along the "
            "excitation's log-scale (jaxrock.sensitivity; NaN: not asked for)", "1", "float", absent=float("nan")),
+    Output("uncertain", "verdict uncertain", f"the overturning verdict could flip under a relative perturbation of {PERTURBATION:g} "
+           f"of the scale: {PERTURBATION:g} x sensitivity reaches the margin to overturning (1 - max theta/alpha'; "
+           f"{MARGIN_OVERTURNED:g} once overturned) (jaxrock.sensitivity; no where the sensitivity is not computed)", "1", "bool",
+           absent=False, needs="sensitivity"),
 )
 OUTPUTS = {o.name: o for o in SUMMARY}
 RESULT_COLUMNS: tuple[str, ...] = (*OUTPUTS, "status")  # a results row: the summary, then the status name
+
+
+def computed(o: Output, values: dict) -> bool:
+    """Whether the output `o` was computed, given every output's values (`values[name]`): False where
+    it `needs` one whose values are all its absent NaN."""
+    if o.needs is None:
+        return True
+    need = np.asarray(values[o.needs], dtype=float)
+    return not np.isnan(need).all()
 
 
 def summary_doc() -> str:

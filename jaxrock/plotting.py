@@ -31,6 +31,7 @@ from .geometry import G  # noqa: E402
 
 CMAP = "viridis"  # perceptually uniform
 OVERTURN_COLOR = "0.55"  # grey fill (with hatching) for overturned cells
+UNCERTAIN_COLOR = "m"  # ring around a cell whose verdict is uncertain (jaxrock.sensitivity)
 LEVELS = np.linspace(0.0, 1.0, 11)
 
 X_LABEL = r"$\omega_p/p$"
@@ -123,6 +124,10 @@ def _draw_spectrum(ax, spectrum, title, *, colorbar=True):
     if bad.any():
         yy, xx = np.nonzero(bad)
         ax.plot(x[xx], y[yy], "rx", ms=4, label="solver status ≠ ok")
+    doubt = np.asarray(getattr(spectrum, "uncertain", np.zeros_like(over)), dtype=bool)
+    if doubt.any():  # verdicts rounding could flip (jaxrock.sensitivity): ringed, over the colours and the grey
+        yy, xx = np.nonzero(doubt)
+        ax.plot(x[xx], y[yy], "o", mfc="none", mec=UNCERTAIN_COLOR, mew=1.2, ms=5, label="verdict uncertain")
     ax.set_xlabel(X_LABEL)
     ax.set_ylabel(Y_LABEL)
     if x.size > 1 and y.size > 1:
@@ -136,13 +141,16 @@ def _draw_spectrum(ax, spectrum, title, *, colorbar=True):
     return cs, cb
 
 
-def _legend_handles():
+def _legend_handles(*spectra):
+    """The legend's entries; "verdict uncertain" where one of `spectra` has such a cell."""
     from matplotlib.lines import Line2D
 
+    doubt = any(np.any(np.asarray(getattr(s, "uncertain", False))) for s in spectra)
     return [
         Line2D([], [], color="k", lw=2.5, label="least uplift"),
         Line2D([], [], color="k", lw=2.5, ls="--", label="least overturning"),
         Patch(facecolor=OVERTURN_COLOR, hatch="//", label="overturned"),
+        *([Line2D([], [], ls="none", marker="o", mfc="none", mec=UNCERTAIN_COLOR, mew=1.2, label="verdict uncertain")] if doubt else []),
     ]
 
 
@@ -151,7 +159,7 @@ def plot_spectrum(spectrum, ax=None, title=None, *, path=None, legend=True):
 
     Overturned cells are grey and hatched; the least uplifting acceleration (solid) and the least
     overturning one (dashed) are drawn bold; cells whose run did not end with `Status.ok` are
-    marked with red crosses. Returns the figure (`fig.jaxrock_data` holds the boundary lines).
+    marked with red crosses, cells whose verdict is uncertain (`jaxrock.sensitivity`) ringed. Returns the figure (`fig.jaxrock_data` holds the boundary lines).
     """
     if ax is None:
         fig, ax = plt.subplots(figsize=(6.0, 4.6))
@@ -159,9 +167,10 @@ def plot_spectrum(spectrum, ax=None, title=None, *, path=None, legend=True):
         fig = ax.figure
     _draw_spectrum(ax, spectrum, title)
     if legend:
-        ax.legend(handles=_legend_handles(), loc="upper left", fontsize=7, framealpha=0.8)
+        ax.legend(handles=_legend_handles(spectrum), loc="upper left", fontsize=7, framealpha=0.8)
     data = boundary_lines(spectrum)
     data["max_theta"] = np.asarray(spectrum.max_theta)
+    data["uncertain"] = int(np.sum(np.asarray(spectrum.uncertain))) if hasattr(spectrum, "uncertain") else 0
     return _finish(fig, path, data)
 
 
@@ -182,7 +191,7 @@ def plot_spectra_grid(spectra, titles=None, *, ncols=None, path=None, suptitle=N
         ax.set_visible(False)
     cb = fig.colorbar(cs, ax=axes, ticks=LEVELS[::2], shrink=0.9)
     cb.set_label(CBAR_LABEL)
-    axes.flat[0].legend(handles=_legend_handles(), loc="upper left", fontsize=7, framealpha=0.8)
+    axes.flat[0].legend(handles=_legend_handles(*spectra), loc="upper left", fontsize=7, framealpha=0.8)
     if suptitle:
         fig.suptitle(suptitle)
     data = {"boundaries": [boundary_lines(s) for s in spectra]}

@@ -173,7 +173,8 @@ def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
         one = ds.isel(sel)
         rows.append({"model": str(one.model.values), "record": str(one.record.values), **fixed, **{d: float(one[d]) for d in cells},
                      "least_scale": float(one.least_scale), "bracket_low": float(one.bracket_low),
-                     "bracket_width": float(one.bracket_width), "windows": int(one.windows), "worst_status": int(one.worst_status)})
+                     "bracket_width": float(one.bracket_width), "windows": int(one.windows), "worst_status": int(one.worst_status),
+                     "uncertain": int(one.least_scale_uncertain)})
     files["least_scale"] = write_table(out / "least_scale.csv", rows)
     units = ds.fragility_median.attrs.get("units", "")
     im = ds.attrs.get("im", "")

@@ -16,6 +16,18 @@ about δ × sensitivity of α′. A short pulse gives O(1) values (the response 
 a chaotic record run grows like exp(λt), λ the finite-time Lyapunov exponent, to 10⁸ and beyond in
 40 s.
 
+The verdict of a run is *uncertain* (`Solution.uncertain`, `verdict_uncertain`) where such a
+perturbation, δ = `PERTURBATION` (1e-7) unless stated, can reach the margin to overturning:
+
+    δ × sensitivity ≥ 1 − max|θ|/α′        (a run that stands),
+    δ × sensitivity ≥ `MARGIN_OVERTURNED`   (a run that overturned: the perturbed run may stand).
+
+`benchmarks/study_uncertain.py` holds the flag against brute force (each scene at 3 tolerances ×
+5 scale factors, ×(1 ± 1e-9) and ×(1 ± 1e-7) among them; results/study_uncertain.txt), which chose
+δ = 1e-7: the largest perturbation the study makes, and a tangent that is linear in it (the
+divergence saturates, and is sampled at loop-step ends) caught too few of the changing verdicts
+at δ = 1e-9.
+
 The stepper must be forward-mode differentiable (`AbstractStepper.checkpointed` False, or a diffrax
 integrator with `autodiff="forward"`); `simulate(..., sensitivity=True)` and `run_batch(...,
 sensitivity=True)` take the model's forward-mode default where no integrator is given.
@@ -29,7 +41,20 @@ import jax.numpy as jnp
 
 from ._validate import JaxrockInputError
 from .model import AbstractIntegrator, AbstractModel, AbstractStepper, Schedule
+from .outputs import MARGIN_OVERTURNED, PERTURBATION  # declared with the output they define
 from .results import Solution
+
+
+def verdict_uncertain(sensitivity, max_theta, overturned, perturbation: float = PERTURBATION):
+    """Whether a relative perturbation `perturbation` of the excitation's scale (or an error of that
+    size anywhere in the run) can flip the overturning verdict: `perturbation × sensitivity`
+    reaches the margin (module docstring). Arrays of any shape; a NaN sensitivity (not computed)
+    gives False."""
+    import numpy as np
+
+    xp = jnp if any(isinstance(x, jax.Array) for x in (sensitivity, max_theta, overturned)) else np
+    margin = xp.where(overturned, MARGIN_OVERTURNED, 1.0 - max_theta)
+    return perturbation * sensitivity >= margin
 
 
 def forward_integrator(model: AbstractModel, integrator: AbstractIntegrator | None) -> AbstractIntegrator:
@@ -98,8 +123,7 @@ class Sensitivity(AbstractStepper):
         return self.stepper.motion(state[0])
 
     def finish(self, excitation, state) -> Solution:
-        sol = self.stepper.finish(excitation, state[0])
-        return eqx.tree_at(lambda s: s.sensitivity, sol, state[2].astype(sol.max_theta.dtype))
+        return _judged(self.stepper.finish(excitation, state[0]), state[2])
 
     @property
     def parts(self) -> tuple[AbstractStepper, ...]:
@@ -107,4 +131,11 @@ class Sensitivity(AbstractStepper):
         return (Sensitivity(parts[0]), *parts[1:]) if parts else ()
 
     def join(self, excitation, solutions) -> Solution:
-        return eqx.tree_at(lambda s: s.sensitivity, self.stepper.join(excitation, solutions), solutions[0].sensitivity)
+        return _judged(self.stepper.join(excitation, solutions), solutions[0].sensitivity)
+
+
+def _judged(sol: Solution, sensitivity) -> Solution:
+    """`sol` with its `sensitivity` and the `uncertain` flag it implies (δ = `PERTURBATION`)."""
+    s = jnp.asarray(sensitivity).astype(sol.max_theta.dtype)
+    flag = verdict_uncertain(s, sol.max_theta, sol.overturned)
+    return eqx.tree_at(lambda x: (x.sensitivity, x.uncertain), sol, (s, flag))

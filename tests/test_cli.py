@@ -40,6 +40,10 @@ def test_spectrum_writes_nc_equal_to_library_and_png(tmp_path):
     np.testing.assert_array_equal(spec.status, ref.status)
     assert "9 cells" in r.output and "overturned:" in r.output and "status: ok" in r.output
     assert f"overturned: {int(ref.overturned.sum())} cells" in r.output
+    # every cell's verdict judged (the command's default; the library's is off): the flag of its own numbers
+    assert np.all(np.isfinite(spec.sensitivity)) and np.all(np.isnan(ref.sensitivity)) and not ref.uncertain.any()
+    np.testing.assert_array_equal(spec.uncertain, jr.verdict_uncertain(spec.sensitivity, spec.max_theta, spec.overturned))
+    assert f"verdict uncertain: {int(spec.uncertain.sum())} of 9 cells" in r.output, r.output
 
 
 def test_spectrum_tol_runs_generalized_alpha(tmp_path):
@@ -47,8 +51,9 @@ def test_spectrum_tol_runs_generalized_alpha(tmp_path):
     with that integrator, cell for cell."""
     out = tmp_path / "spec"
     r = invoke("spectrum", "--model", "spring", "--n-omega", 2, "--n-accel", 3, "--omega-min", 2, "--omega-max", 6,
-               "--accel-min", 0.8, "--accel-max", 6, "--tol", 1e-6, "--refine", 0, "--out", out, "--quiet")
+               "--accel-min", 0.8, "--accel-max", 6, "--tol", 1e-6, "--refine", 0, "--out", out, "--quiet", "--no-sensitivity")
     assert r.exit_code == 0, r.output
+    assert "verdict uncertain: not computed" in r.output and "sensitivity: not computed" in r.output, r.output
     spec = Spectrum.load(tmp_path / "spec.nc")
     model = jr.SpringModel(jr.Block.from_slenderness(10.0, 0.2))
     ref = overturning_spectrum(model, np.linspace(2, 6, 2), np.linspace(0.8, 6, 3), integrator=jr.GeneralizedAlpha(1e-6, 1e-6),
@@ -136,6 +141,20 @@ def test_simulate_prints_max_theta_of_simulate(tmp_path):
     assert ("overturned: no" in r.output) == (not bool(sol.overturned))
     assert "status: ok" in r.output
     assert png.stat().st_size > 1000
+    assert "sensitivity: not computed" in r.output and "verdict uncertain: not computed" in r.output
+
+
+def test_simulate_sensitivity_reports_the_tangent_and_the_verdicts_doubt():
+    """`--sensitivity`: the run's sensitivity as `simulate(..., sensitivity=True)` gives it, and
+    its uncertain flag (El Centro, 1.5 m block at 1.95× its uplift factor: rounding decides)."""
+    r = invoke("simulate", "--height", 1.5, "--record", "elcentro", "--scale", 1.95 * 0.2 / 0.3129, "--sensitivity")
+    assert r.exit_code == 0, r.output
+    block = jr.Block.from_slenderness(1.5, 0.2)
+    rec = jr.builtin_record("elcentro")
+    sol = jr.simulate(jr.RigidModel(block), rec.scaled(1.95 * 0.2 / 0.3129), sensitivity=True)
+    printed = float(re.search(r"sensitivity = (\S+)", r.output).group(1))
+    assert printed == pytest.approx(float(sol.sensitivity), rel=1e-5)
+    assert f"verdict uncertain: {'yes' if bool(sol.uncertain) else 'no'}" in r.output
 
 
 def test_simulate_spring_backbone_options_are_the_models():
@@ -203,8 +222,9 @@ def test_spectrum_file_says_how_it_was_made(tmp_path):
 
     out = tmp_path / "spec"
     r = invoke("spectrum", "--model", "spring", "--n-omega", 2, "--n-accel", 3, "--omega-min", 2, "--omega-max", 6,
-               "--accel-min", 0.8, "--accel-max", 6, "--tol", 1e-6, "--refine", 0, "--out", out, "--quiet")
+               "--accel-min", 0.8, "--accel-max", 6, "--tol", 1e-6, "--refine", 0, "--out", out, "--quiet", "--no-sensitivity")
     assert r.exit_code == 0, r.output
+    assert "verdict uncertain: not computed" in r.output and "sensitivity: not computed" in r.output, r.output
     with xr.open_dataset(tmp_path / "spec.nc", engine="scipy") as ds:
         units = {o.name: o.units for o in jr.SUMMARY}  # times in s; ratios, flags, counts and codes 1
         for name in [*ds.data_vars, *ds.coords]:

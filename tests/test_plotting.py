@@ -37,7 +37,7 @@ def _spectrum(shift=0.0, status_bad=False):
     return Spectrum(
         omega_ratio=w, accel_ratio=a, max_theta=theta, overturned=over, uplifted=uplifted, status=status,
         t_overturn=np.where(over, 1.0, np.inf), t_uplift=np.where(uplifted, 0.0, np.inf), n_impacts=np.zeros(A.shape, np.int64),
-        sensitivity=np.full(A.shape, np.nan),
+        sensitivity=np.full(A.shape, np.nan), uncertain=np.zeros(A.shape, bool),
         attrs={"model": "RigidModel", "tan_alpha": 0.2, "height": 10.0, "pulse": "RickerPulse", "alpha": 0.197, "p": 1.2},
     )
 
@@ -76,6 +76,24 @@ def test_plot_spectrum_draws_the_spectrum_boundaries(tmp_path):
     assert (tmp_path / "s.png").stat().st_size > 1000
     # the bad-status cell is marked
     assert _has_line(ax, [s.omega_ratio[4]], [s.accel_ratio[3]])
+    assert fig.jaxrock_data["uncertain"] == 0 and "verdict uncertain" not in [t.get_text() for t in ax.get_legend().get_texts()]
+    plt.close(fig)
+
+
+def test_plot_spectrum_rings_the_uncertain_verdicts():
+    """Cells whose verdict rounding could flip (`uncertain`) are ringed, each where it is, and the
+    legend names them."""
+    import equinox as eqx
+
+    s = _spectrum()
+    doubt = np.zeros(s.max_theta.shape, bool)
+    doubt[[6, 7], [2, 9]] = True
+    s = eqx.tree_at(lambda x: x.uncertain, s, doubt)
+    fig = plot_spectrum(s)
+    ax = fig.axes[0]
+    assert fig.jaxrock_data["uncertain"] == 2
+    assert _has_line(ax, s.omega_ratio[[2, 9]], s.accel_ratio[[6, 7]])
+    assert "verdict uncertain" in [t.get_text() for t in ax.get_legend().get_texts()]
     plt.close(fig)
 
 
@@ -128,7 +146,7 @@ def test_plot_history_draws_theta_over_alpha_and_ground_motion(tmp_path):
     theta = 0.1 * np.sin(ts)
     sol = jr.Solution(
         max_theta=np.float64(0.5), overturned=np.bool_(True), t_overturn=np.float64(2.0), uplifted=np.bool_(True),
-        t_uplift=np.float64(-0.5), n_impacts=np.int32(1), sensitivity=np.float64(np.nan), status=jr.Status.ok, ts=ts,
+        t_uplift=np.float64(-0.5), n_impacts=np.int32(1), sensitivity=np.float64(np.nan), uncertain=np.False_, status=jr.Status.ok, ts=ts,
         history={"theta": theta},
     )
     exc = jr.RickerPulse(3.0, 4.0)
@@ -144,7 +162,7 @@ def test_plot_history_draws_theta_over_alpha_and_ground_motion(tmp_path):
     plt.close(fig)
     no_hist = jr.Solution(
         max_theta=np.float64(0.5), overturned=np.bool_(False), t_overturn=np.float64(np.inf), uplifted=np.bool_(True),
-        t_uplift=np.float64(0.0), n_impacts=np.int32(1), sensitivity=np.float64(np.nan), status=jr.Status.ok,
+        t_uplift=np.float64(0.0), n_impacts=np.int32(1), sensitivity=np.float64(np.nan), uncertain=np.False_, status=jr.Status.ok,
     )
     with pytest.raises(ValueError, match="time history"):
         plot_history(no_hist, exc)

@@ -126,7 +126,8 @@ class OscillatorStepper(jr.AbstractStepper):
         status = jr.Status.where(finished, jr.Status.ok, jr.Status.max_iterations)
         peak = jnp.where(s["over"], m.threshold, jnp.minimum(s["peak"] / m.block.alpha_r, m.threshold))
         return jr.Solution(max_theta=peak, overturned=s["over"], t_overturn=s["t_over"], uplifted=jnp.isfinite(s["t_up"]),
-                           t_uplift=s["t_up"], n_impacts=jnp.zeros((), jnp.int32), sensitivity=jnp.asarray(jnp.nan), status=status,
+                           t_uplift=s["t_up"], n_impacts=jnp.zeros((), jnp.int32), sensitivity=jnp.asarray(jnp.nan),
+                           uncertain=jnp.asarray(False), status=status,
                            n_iterations=s["n"])
 
 

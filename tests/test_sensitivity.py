@@ -50,18 +50,46 @@ def test_the_sensitivity_is_the_slope_of_the_motion_in_the_scale(ar, wr, kind):
     assert float(s.sensitivity) >= 0.85 * slope, (float(s.sensitivity), slope)
 
 
-def test_a_chaotic_record_run_is_sensitive_and_a_short_pulse_is_not():
+def test_a_chaotic_record_run_is_sensitive_and_uncertain_and_a_short_pulse_is_not():
     """El Centro on a 3 m block (tanα 0.2) at 2.5× its uplift factor rocks to 0.886 α without
-    overturning, its tangent grown to ~5e8 (a perturbation of 1e-9 of the scale moves θ by ~0.5 α:
-    the verdict is not determined); a Ricker pulse's stays O(1). Either way the summary is the
-    plain run's, bit for bit."""
+    overturning, its tangent grown to ~5e8; a Ricker pulse's stays O(1), its verdict certain.
+    Either way the summary is the plain run's, bit for bit. On a 1.5 m block at 1.95× the record
+    overturns, and the verdict is rounding's: relative perturbations of 1e-9 of the scale give
+    both verdicts, and the run is flagged `uncertain`."""
     rec = el_centro()
-    run = rec.scaled(2.5 * G * 0.2 / float(jnp.max(jnp.abs(rec.acc))))
+    uplift = G * 0.2 / float(jnp.max(jnp.abs(rec.acc)))
+    run = rec.scaled(2.5 * uplift)
     s = jr.simulate(RM, run, sensitivity=True)
     same_summary(s, jr.simulate(RM, run))
     assert not bool(s.overturned) and float(s.sensitivity) > 1e7, float(s.sensitivity)
+    small = jr.RigidModel(jr.Block.from_slenderness(1.5, 0.2))
+    flips = jr.run_batch(small, jax.vmap(rec.scaled)(1.95 * uplift * (1 + 1e-9 * jnp.arange(-8.0, 9.0))))
+    assert np.any(np.asarray(flips.overturned)) and not np.all(np.asarray(flips.overturned))
+    assert bool(jr.simulate(small, rec.scaled(1.95 * uplift), sensitivity=True).uncertain)
     short = jr.simulate(RM, pulse(2.0, 3.0), sensitivity=True)
-    assert float(short.sensitivity) < 10.0
+    assert float(short.sensitivity) < 10.0 and not bool(short.uncertain)
+    assert not bool(jr.simulate(RM, pulse(2.0, 3.0)).uncertain)  # not computed: never flagged
+
+
+def test_the_uncertain_flag_is_the_perturbation_against_the_margin():
+    """`verdict_uncertain`: a standing run is uncertain once δ × sensitivity reaches 1 − max θ/α′,
+    an overturned one once it reaches `MARGIN_OVERTURNED`; a NaN sensitivity (not computed) never.
+    And every run of a batch reports the flag its own numbers give."""
+    from jaxrock.outputs import MARGIN_OVERTURNED, PERTURBATION
+
+    margin = np.array([0.1, 0.1, MARGIN_OVERTURNED, MARGIN_OVERTURNED, 0.1])
+    s = margin / PERTURBATION * np.array([0.999, 1.001, 0.999, 1.001, np.nan])
+    over = np.array([False, False, True, True, False])
+    got = jr.verdict_uncertain(s, np.where(over, 1.0, 1.0 - margin), over)
+    np.testing.assert_array_equal(got, [False, True, False, True, False])
+    assert bool(jr.verdict_uncertain(1.0, 1.0 - 1e-3, False, perturbation=2e-3))
+    rec = el_centro()
+    k = G * 0.2 / float(jnp.max(jnp.abs(rec.acc))) * jnp.linspace(1.0, 4.5, 8)  # 2.5x among them
+    sol = jr.run_batch(RM, jax.vmap(rec.scaled)(k), sensitivity=True)
+    np.testing.assert_array_equal(np.asarray(sol.uncertain),
+                                  jr.verdict_uncertain(np.asarray(sol.sensitivity), np.asarray(sol.max_theta), np.asarray(sol.overturned)))
+    assert np.any(np.asarray(sol.uncertain)) and not np.all(np.asarray(sol.uncertain))
+    np.testing.assert_array_equal(np.asarray(sol.sensitivity) > 0, np.asarray(sol.uplifted))
 
 
 def test_a_batch_reports_each_runs_sensitivity_as_simulate_does():

@@ -229,7 +229,18 @@ def test_suite_command_writes_the_dataset_tables_and_figures(tmp_path):
         fit = jr.fit_lognormal(x, one.overturned.values, np.repeat(np.arange(x.shape[0])[:, None], x.shape[1], 1), n_boot=50)
         assert float(row["median"]) == fit["median"] and float(row["beta"]) == fit["beta"]
         assert int(row["n_overturned"]) == int(one.overturned.sum())
-    assert all(np.isfinite(float(row["least_scale"])) == (row["bracket_low"] != "nan") for row in read_csv(tmp_path / "s" / "least_scale.csv"))
+    least_rows = read_csv(tmp_path / "s" / "least_scale.csv")
+    assert all(np.isfinite(float(row["least_scale"])) == (row["bracket_low"] != "nan") for row in least_rows)
+    # every run's verdict judged (the suite's default): its flag is its own numbers', and a least
+    # factor decided by an uncertain run of the sweep says so, in the dataset, the table and the summary
+    one = ds.isel(model=0)
+    np.testing.assert_array_equal(one.uncertain.values, jr.verdict_uncertain(one.sensitivity.values, one.max_theta.values,
+                                                                             one.overturned.values))
+    assert np.all(np.isfinite(one.sensitivity.values))
+    decided = (one.uncertain & (one.scale <= one.least_scale)).any("scale").values
+    assert np.all(one.least_scale_uncertain.values[decided])
+    assert [int(row["uncertain"]) for row in least_rows] == [int(x) for x in one.least_scale_uncertain.values.ravel()]
+    assert f"verdict uncertain: {int(one.least_scale_uncertain.sum())} of {one.least_scale.size} least factor(s)" in r.output, r.output
     again = invoke(*args)  # the sweep's store is resumed: the same numbers
     assert again.exit_code == 0, again.output
     assert xr.open_zarr(tmp_path / "s" / "suite.zarr").load().least_scale.equals(ds.least_scale)

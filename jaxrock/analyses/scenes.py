@@ -25,6 +25,7 @@ from ..io.files import exclusive, same_file
 from ..io.results_file import append_results, read_done, result_rows, results_path_for, rewrite_results, start_results
 from ..io.scenes_file import Scenes, read_scenes
 from ..results import OUTPUTS, RESULT_COLUMNS, STATUS_NAMES
+from ..outputs import computed
 from .engine import run_batch
 
 
@@ -141,7 +142,8 @@ def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> Bat
         n_groups=len(todo),
         seconds=time.perf_counter() - t0,
         status_counts=counts,
-        flag_counts={name: sum(int(allrows[r][name]) for r in allrows) for name, o in OUTPUTS.items() if o.kind == "bool"},
+        flag_counts={name: sum(int(allrows[r][name]) for r in allrows) for name, o in OUTPUTS.items()
+                     if o.kind == "bool" and computed(o, {o.needs: [float(allrows[r][o.needs]) for r in allrows]} if o.needs else {})},
         path=results,
     )
 

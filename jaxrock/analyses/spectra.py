@@ -27,6 +27,7 @@ from ..model import AbstractIntegrator, AbstractModel
 from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module
 from ..geometry import pulse_of_ratios
 from ..scene import AXES, DEFAULT_PULSE, pulse_class
+from ..sensitivity import forward_integrator
 from .engine import batch_limit, even_batches, make_stepper, run_batch
 from .suite import least_overturning_scale
 from .sweep import Sweep, run_sweep
@@ -159,6 +160,7 @@ def overturning_spectrum(
     checkpoint: str | os.PathLike | None = None,
     keep_checkpoint: bool = False,
     refine: int = 0,
+    sensitivity: bool = False,
 ) -> Spectrum:
     """max |θ|/α′ of `model` over the grid `accel_ratio` (a_p/(g tanα′)) × `omega_ratio` (ω_p/p′).
 
@@ -175,6 +177,8 @@ def overturning_spectrum(
       pulse, grid, integrator, version) or an unreadable one is refused with a
       `JaxrockInputError`, and so is one that another run is writing (`<checkpoint>.lock`).
     - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
+    - `sensitivity`: every cell carries its tangent and reports its `sensitivity` and whether its
+      verdict is `uncertain` (`jaxrock.sensitivity`); else those read "not computed" / no.
     """
     wr = check_grid("omega_ratio (omega_p/p)", omega_ratio)
     ar = check_grid("accel_ratio (a_p/(g tan alpha))", accel_ratio)
@@ -183,10 +187,14 @@ def overturning_spectrum(
     cls = pulse_class(pulse)
     ck = Path(checkpoint) if checkpoint is not None else None
     n = wr.size * ar.size
-    integ = model.default_integrator() if integrator is None else integrator
-    stepper = make_stepper(model, integ, False)  # compiled once, reused by run_batch (the same call)
+    if sensitivity:
+        integ = forward_integrator(model, integrator)
+    else:
+        integ = model.default_integrator() if integrator is None else integrator
+    stepper = make_stepper(model, integ, False, sensitivity)  # compiled once, reused by run_batch (the same call)
     chunk = even_batches(n, min(int(batch_size), batch_limit(stepper)), stepper.schedule.batch_unit)
-    sweep = Sweep.make(model, pulse=cls, accel_ratio=ar, omega_ratio=wr, integrator=integrator, chunk_size=chunk)
+    sweep = Sweep.make(model, pulse=cls, accel_ratio=ar, omega_ratio=wr, integrator=integrator, chunk_size=chunk,
+                       sensitivity=sensitivity)
     ds = run_sweep(sweep, ck, progress=progress)
     block = model.block
     attrs = {

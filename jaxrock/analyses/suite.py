@@ -40,7 +40,9 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
       `bracket_low` (the largest factor known not to overturn below it; NaN where none
       overturns), `bracket_width` = least_scale − bracket_low (after `refine` bisections: the
       sweep's step / 2^refine), and `worst_status`, the largest status code of the cell's runs
-      (sweep and bisection: 0 = every run ok), and `windows` (module docstring).
+      (sweep and bisection: 0 = every run ok), `windows` (module docstring), and
+      `least_scale_uncertain`: whether a run that decided the least factor has an uncertain
+      verdict (`jaxrock.sensitivity`; computed by a sweep made with `sensitivity=True`).
 
     `store`, `progress`, `devices`, `history` as `run_sweep`. With a store, each record's finished
     bisection is kept beside it (`<store>.bisection.npz`, written atomically, with the store's
@@ -63,14 +65,18 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     hi = np.where(has, sc[k], np.inf)
     lo = np.where(has, np.where(k > 0, sc[np.maximum(k - 1, 0)], 0.0), np.nan)
     worst = status.max(axis=-1)
+    # the least factor is uncertain where a run that decided it is: a factor of the sweep up to it
+    # (every factor where none overturns) or a bisection's
+    uncertain = (ds.uncertain.values & (sc <= hi[..., None])).any(axis=-1)
     cell_dims = sweep.dims[1:-1]
     cells = sweep.values_at(tuple(slice(0, len(sweep.axes[d])) for d in cell_dims), cell_dims)  # every column, C order
-    kept = _Bisections(store, ds.attrs["made_by"], int(refine), hi, lo, worst)
+    found = {"hi": hi, "lo": lo, "worst": worst, "uncertain": uncertain}
+    kept = _Bisections(store, ds.attrs["made_by"], int(refine), **found)
     groups = _groups([r for r in range(len(sweep.records)) if has[r].any() and not kept.done[r]], has)
 
     def bisect(group, devs):
         todo = has[group].reshape(len(group), -1)
-        h, l, w = (a[group].reshape(len(group), -1).copy() for a in (hi, lo, worst))
+        h, l, w, u = (a[group].reshape(len(group), -1).copy() for a in found.values())
         v = {name: np.broadcast_to(x.ravel(), todo.shape)[todo] for name, x in cells.items()}
         v["record"] = np.broadcast_to(np.asarray(group)[:, None], todo.shape)[todo]
         for _ in range(int(refine)):
@@ -81,13 +87,14 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
             h[todo] = np.where(yes, mid, h[todo])
             l[todo] = np.where(yes, l[todo], mid)
             w[todo] = np.maximum(w[todo], out["status"])
+            u[todo] = u[todo] | out["uncertain"].astype(bool)
             bar.update()
-        return h, l, w
+        return h, l, w, u
 
-    def done(group, hlw):
-        h, l, w = hlw
+    def done(group, results):
         for i, r in enumerate(group):
-            hi[r], lo[r], worst[r] = h[i].reshape(hi[r].shape), l[i].reshape(lo[r].shape), w[i].reshape(worst[r].shape)
+            for a, x in zip(found.values(), results):
+                a[r] = x[i].reshape(a[r].shape)
             kept.finished(r)
 
     with tqdm(total=len(groups) * int(refine), desc="bisection", unit="batch", disable=not progress) as bar:
@@ -99,6 +106,10 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     ds["windows"] = (dims, (over[..., :-1] & ~over[..., 1:]).sum(-1).astype(np.int32),
                      {"long_name": "times the sweep's outcome turns from overturned to not as the factor grows (0: monotone)"})
     ds["worst_status"] = (dims, worst.astype(np.int32), {"long_name": "largest jaxrock.Status code of the cell's runs (0: all ok)"})
+    ds["least_scale_uncertain"] = (dims, uncertain, {
+        "long_name": "a run that decided least_scale (a factor of the sweep up to it, every factor where none overturns, or a "
+                     "bisection's) has an uncertain verdict (jaxrock.sensitivity; never where the sweep computes no sensitivity)",
+        "units": "1"})
     ds.attrs["refine"] = int(refine)
     return ds
 
@@ -117,21 +128,24 @@ def _groups(records: list[int], has) -> list[list[int]]:
 
 class _Bisections:
     """The bisections finished so far, kept beside the sweep's store (`<store>.bisection.npz`):
-    loaded into `hi`, `lo`, `worst` (in place) when made by the same sweep and `refine`."""
+    loaded into `arrays` (name → an array over records, in place) when made by the same sweep and
+    `refine`."""
 
-    def __init__(self, store, made_by: str, refine: int, hi, lo, worst):
+    def __init__(self, store, made_by: str, refine: int, **arrays):
         from pathlib import Path
 
         self.path = None if store is None else Path(f"{store}.bisection.npz")
-        self.key, self.arrays = np.array(f"{made_by}\nrefine={refine}"), (hi, lo, worst)
-        self.done = np.zeros(hi.shape[0], dtype=bool)
+        self.key, self.arrays = np.array(f"{made_by}\nrefine={refine}"), arrays
+        first = next(iter(arrays.values()))
+        self.done = np.zeros(first.shape[0], dtype=bool)
         if self.path is not None and self.path.is_file():
             try:
                 with np.load(self.path) as f:
-                    if str(f["key"]) == str(self.key) and f["hi"].shape == hi.shape:
-                        self.done = f["done"].copy()
-                        for a, name in zip(self.arrays, ("hi", "lo", "worst")):
-                            a[self.done] = f[name][self.done]
+                    if str(f["key"]) == str(self.key) and all(f[k].shape == a.shape for k, a in arrays.items()):
+                        done = f["done"].copy()
+                        for name, a in arrays.items():
+                            a[done] = f[name][done]
+                        self.done = done
             except Exception:  # unreadable (a crash while writing cannot leave one: it is renamed whole): run again
                 self.done[:] = False
 
@@ -140,11 +154,9 @@ class _Bisections:
         if self.path is not None:
             from ..io.files import write_atomically
 
-            hi, lo, worst = self.arrays
-
             def write(tmp):
                 with open(tmp, "wb") as fh:
-                    np.savez(fh, key=self.key, done=self.done, hi=hi, lo=lo, worst=worst)
+                    np.savez(fh, key=self.key, done=self.done, **self.arrays)
 
             write_atomically(self.path, write)
 
@@ -228,13 +240,16 @@ def check_motion(records) -> None:
 
 
 def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boot: int | None = None, store_dir=None,
-              progress: bool = True, history: str | None = None, integrator=None, **quantities):
+              progress: bool = True, history: str | None = None, integrator=None, sensitivity: bool = True, **quantities):
     """A record suite for each model kind of `models` (e.g. ("rigid", "spring", "spring-flexible")):
     the record sweep of `records` × `quantities` (the column's axes or fixed values, as `Sweep.make`)
     × `scale`, its least overturning factors (`least_overturning_scale`, `refine` bisections) and
     its fragility against `im` (`suite_fragility`), with the records' measures
     (`jaxrock.intensity.suite_measures`). Returns one `xarray.Dataset` with a `model` dimension.
-    `store_dir`: each model's sweep is kept in `<store_dir>/<model>.zarr` (a rerun resumes it)."""
+    `store_dir`: each model's sweep is kept in `<store_dir>/<model>.zarr` (a rerun resumes it).
+    `sensitivity` (default on: record runs are where verdicts turn chaotic): every run reports its
+    sensitivity and whether its verdict is uncertain, and each column whether its least factor is
+    (`least_scale_uncertain`; `jaxrock.sensitivity`)."""
     from pathlib import Path
 
     import xarray as xr
@@ -248,7 +263,7 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
     check_grid("scale (record factors)", scale)  # the least overturning factor is the first of them that overturns
     _check_im(im)
     check_motion(records)
-    sweeps = [Sweep.make(m, records=records, scale=scale, integrator=integrator, **quantities) for m in models]  # every input checked first
+    sweeps = [Sweep.make(m, records=records, scale=scale, integrator=integrator, sensitivity=sensitivity, **quantities) for m in models]  # every input checked first
     measures = suite_measures(sweeps[0].records)
     parts = []
     for m, sweep in zip(models, sweeps):

@@ -52,7 +52,10 @@ class Sweep:
     - `pulse`: the Ricker pulse kind or class (pulse sweeps), or None with `records` (record sweeps:
       `axes["record"]` holds their names);
     - `integrator`: None (the model's default) or an integrator;
-    - `chunk_size`: the most scenes of one chunk.
+    - `chunk_size`: the most scenes of one chunk;
+    - `sensitivity`: every run carries its tangent and reports its `sensitivity` and `uncertain`
+      flag (`jaxrock.sensitivity`; forward mode: without `integrator`, the model's forward-mode
+      default); else those outputs read "not computed".
     """
 
     model: str
@@ -63,10 +66,11 @@ class Sweep:
     backbone: str | None = None
     integrator: object = None
     chunk_size: int = 1024
+    sensitivity: bool = False
 
     @classmethod
     def make(cls, model="rigid", *, pulse=None, records=None, backbone: str | None = None,
-             integrator=None, chunk_size: int = 1024, **quantities) -> "Sweep":
+             integrator=None, chunk_size: int = 1024, sensitivity: bool = False, **quantities) -> "Sweep":
         """A checked sweep: each keyword of `QUANTITIES` is one number (fixed) or a sequence (an
         axis). Pulse sweeps take `accel_ratio` and `omega_ratio` (both required; `pulse` a pulse
         kind's name or class); record sweeps take `records` (a `jaxrock.Record` or a sequence of
@@ -130,7 +134,7 @@ class Sweep:
         if tb is not None and np.min(tb) < np.max(ta):
             raise JaxrockInputError(f"tan_alpha_base = {np.min(tb):g} < tan_alpha = {np.max(ta):g}; valid: every tan_alpha_base >= every tan_alpha")
         sweep = cls(model=model, axes=axes, fixed=fixed, pulse=pulse, records=recs, backbone=backbone, integrator=integrator,
-                    chunk_size=int(chunk_size))
+                    chunk_size=int(chunk_size), sensitivity=bool(sensitivity))
         sweep._check_models()
         return sweep
 
@@ -217,7 +221,8 @@ class Sweep:
 
         d = provenance.describe(model=self.template_model, excitation=self.excitation, integrator=self.integrator,
                                 grid={k: v for k, v in self.axes.items() if k != "record"})
-        d.update({"model kind": self.kind, "backbone": str(self.backbone), "chunk_shape": str(self.chunk_shape)})
+        d.update({"model kind": self.kind, "backbone": str(self.backbone), "chunk_shape": str(self.chunk_shape),
+                  "sensitivity": str(self.sensitivity)})
         if "record" in self.axes:
             d["grid record"] = ",".join(self.axes["record"])
         d.update({f"fixed {k}": repr(v) for k, v in self.fixed.items()})
@@ -247,9 +252,14 @@ class Sweep:
         (`engine.batch_limit`): a chunk larger than it runs in several batches."""
         import equinox as eqx
 
+        from ..sensitivity import forward_integrator
+
         model = self.template_model
-        integ = model.default_integrator() if self.integrator is None else self.integrator
-        return batch_limit(eqx.filter_eval_shape(make_stepper, model, integ, False))
+        if self.sensitivity:
+            integ = forward_integrator(model, self.integrator)
+        else:
+            integ = model.default_integrator() if self.integrator is None else self.integrator
+        return batch_limit(eqx.filter_eval_shape(make_stepper, model, integ, False, self.sensitivity))
 
     @property
     def kind(self) -> str:
@@ -358,7 +368,7 @@ def run_values(sweep: Sweep, v: dict[str, np.ndarray], devices=None) -> dict[str
     for lo in range(0, n, limit):
         sl = slice(lo, min(lo + limit, n))
         m = take(model, sl) if batched else model
-        sol = run_batch(m, take(exc, sl), sweep.integrator, model_batched=batched, devices=devices)
+        sol = run_batch(m, take(exc, sl), sweep.integrator, model_batched=batched, devices=devices, sensitivity=sweep.sensitivity)
         parts.append({name: np.asarray(getattr(sol, name)) for name in OUTPUTS} | {"status": np.asarray(status_codes(sol.status))})
     out = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
     out["status"] = out["status"].astype(np.int32)

@@ -15,12 +15,14 @@ import typer
 
 from . import guards
 from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untrusted, _guarded,
-                     _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds)
+                     _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds,
+                     CELL_SECONDS, SENSITIVITY_COST)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_REFINE, MODEL_PARAMETERS, PULSES,
                      RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, parameter_help)
 from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
-                      _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary)
+                      _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary, SENSITIVITY_HELP,
+                      uncertain_line)
 
 FORCE_OPTION = typer.Option(False, "--force", help="let outputs replace existing files that jaxrock did not write "
                             "(without it such a file is refused; symbolic links always are)")
@@ -61,6 +63,7 @@ def spectrum(
     tol: Optional[float] = typer.Option(
         None, help="spring models: run generalized-α at this local tolerance in (0, 0.1), its global error checked by a run at 10x "
         "the tolerance (status inaccurate beyond 1e-2 in θ/α; see README); default: the model's default integrator"),
+    sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),
@@ -78,7 +81,7 @@ def spectrum(
         check_output("--out", Path(f"{out}{suffix}"))
     _hold(out, "--out")
     kind = "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value
-    _estimate(wr.size * ar.size, kind, yes)
+    _estimate(wr.size * ar.size, kind, yes, per_cell=CELL_SECONDS[kind] * (SENSITIVITY_COST if sensitivity else 1.0))
     ck = Path(f"{out}.checkpoint") if checkpoint else None
     t0 = time.perf_counter()
     from ..analyses.spectra import overturning_spectrum
@@ -86,7 +89,7 @@ def spectrum(
 
     try:
         spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=batch_size, progress=not quiet,
-                                    checkpoint=ck, keep_checkpoint=True, refine=refine)
+                                    checkpoint=ck, keep_checkpoint=True, refine=refine, sensitivity=sensitivity)
     except Interrupted:
         _interrupted(ck, wr.size * ar.size)
     seconds = time.perf_counter() - t0
@@ -107,8 +110,13 @@ def spectrum(
     _exit_if_untrusted(_status_counts(spec.status), "cell(s)")
 
 
-def _simulate(model, excitation, save=None, integrator=None):
-    """`jaxrock.simulate` through a kernel kept between processes (`jaxrock.analyses.kernels`)."""
+def _simulate(model, excitation, save=None, integrator=None, sensitivity: bool = False):
+    """`jaxrock.simulate` through a kernel kept between processes (`jaxrock.analyses.kernels`);
+    with its sensitivity, compiled in this process (`jaxrock.simulate`)."""
+    if sensitivity:
+        from ..model import simulate as run
+
+        return run(model, excitation, save=save, integrator=integrator, sensitivity=True)
     from ..analyses import kernels
 
     return kernels.simulate(model, excitation, save=save, integrator=integrator)
@@ -144,6 +152,7 @@ def simulate(
                                        "picks that format)"),
     t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
     n_points: Optional[int] = typer.Option(None, help=f"plot: number of saved time points, 2 to {MAX_PLOT_POINTS:,} (default 1500)"),
+    sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     force: bool = FORCE_OPTION,
 ):
     """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
@@ -169,7 +178,7 @@ def simulate(
     import jax
 
     t0 = time.perf_counter()
-    sol = jax.block_until_ready(_simulate(m, exc, integrator=integ))  # JAX returns before it has computed
+    sol = jax.block_until_ready(_simulate(m, exc, integrator=integ, sensitivity=sensitivity))  # JAX returns before it has computed
     seconds = time.perf_counter() - t0
     typer.echo(f"{model.value} model, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}")
     typer.echo(solution_summary(sol, m))
@@ -472,6 +481,7 @@ def suite(
     units: Optional[str] = typer.Option(None, help="acceleration units of two-column record files (default g)"),
     out: Path = typer.Option(Path("out/suite"), help="output folder: suite.zarr, least_scale.csv/.png, fragility.csv/.md/.png, "
                              "and each model's sweep store <model>.zarr (a rerun resumes it)"),
+    sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a suite estimated beyond 1 h"),
@@ -514,7 +524,7 @@ def suite(
     for k in kinds:
         sw = Sweep.make(k, records=recs, scale=sc, **given)  # every value checked before anything runs
         n = sw.size + refine * sw.size // sc.size
-        runs, cost = runs + n, cost + n * record_run_seconds(k, seconds)
+        runs, cost = runs + n, cost + n * record_run_seconds(k, seconds) * (SENSITIVITY_COST if sensitivity else 1.0)
     _estimate(int(runs), kinds[0], yes, what=f"record runs ({', '.join(kinds)})", per_cell=cost / runs)
     from ..analyses.suite import run_suite
     from ..geometry import G
@@ -525,7 +535,7 @@ def suite(
     t0 = time.perf_counter()
     try:
         ds = run_suite(kinds, recs, scale=sc, refine=refine, im=im, n_boot=boot, store_dir=out, progress=not quiet,
-                       history=_history(), **given)
+                       history=_history(), sensitivity=sensitivity, **given)
     except Interrupted:
         kept = ", ".join(f"{out / f'{k}.zarr'} ({zstore.kept_scenes(out / f'{k}.zarr'):,} runs)" for k in kinds if (out / f"{k}.zarr").is_dir())
         typer.echo(f"interrupted: the sweeps kept in {kept or 'no store yet'}; resume with: {_resume_command()}", err=True)
@@ -539,6 +549,8 @@ def suite(
         one = ds.isel(record=r)
         typer.echo(f"{str(one.record.values)[:23]:<24}{float(one.pga) / G:9.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
     typer.echo(Path(files["table"]).read_text(encoding="utf-8").split("\n\n")[1])
+    typer.echo(uncertain_line(ds.least_scale_uncertain.values if sensitivity else None, ds.uncertain.values, "least factor(s)",
+                              ds.least_scale.size))
     typer.echo("wrote " + ", ".join(str(p) for p in files.values()))
     _exit_if_untrusted(_status_counts(ds.worst_status.values), "column(s) × record(s)")
 

@@ -88,6 +88,9 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.0f} s" if seconds < 120 else (f"{seconds / 60:.0f} min" if seconds < 7200 else f"{seconds / 3600:.1f} h")
 
 
+SENSITIVITY_COST = 2.0  # a run with its tangent against one without (benchmarks/study_uncertain.py: 1.4x records, 2.3x pulses)
+
+
 def record_run_seconds(kind: str, seconds: float) -> float:
     """The estimated cost of one run of a `seconds`-long record with a model of `kind`."""
     return RECORD_RUN_SECONDS.get(kind, RECORD_RUN_SECONDS["spring-flexible"]) * seconds / 40.0  # a registered kind: the dearest

@@ -145,6 +145,24 @@ def _integrator(model: ModelKind, tol: Optional[float]):
     return Checked(GeneralizedAlpha(rtol=tol, atol=tol))
 
 
+SENSITIVITY_HELP = ("carry each run's tangent along its scale: report its sensitivity and count the verdicts a relative perturbation "
+                    "of 1e-7 could flip (uncertain; jaxrock.sensitivity); costs about 1.4x a record run, 2x a pulse cell")
+
+
+def uncertain_line(flags, runs=None, what: str = "cells", n: int | None = None) -> str:
+    """How many of `flags` (None: not computed) are uncertain verdicts; `runs`: the flags of the
+    runs behind them (a suite's sweep), counted too."""
+    from ..outputs import PERTURBATION
+
+    if flags is None:
+        return "verdict uncertain: not computed (--no-sensitivity)"
+    flags = np.asarray(flags, dtype=bool)
+    n = flags.size if n is None else n
+    behind = "" if runs is None else f"; {int(np.sum(runs))} of the sweep's {np.size(runs):,} runs"
+    return (f"verdict uncertain: {int(flags.sum())} of {n:,} {what}{behind} (a relative perturbation of {PERTURBATION:g} of the scale "
+            "could flip them: jaxrock.sensitivity)")
+
+
 def _grid_line(o, values) -> str:
     """A summary output over a spectrum's cells: a flag's count and share, else its range."""
     if o.kind == "bool":
@@ -157,6 +175,7 @@ def _grid_line(o, values) -> str:
 
 
 def spectrum_summary(spec, seconds: float) -> str:
+    from ..outputs import OUTPUTS, computed
     from ..results import STATUS_NAMES, SUMMARY
 
     a = spec.attrs
@@ -169,7 +188,8 @@ def spectrum_summary(spec, seconds: float) -> str:
         f"(rocking α = {float(a['alpha']):.4g} rad, p = {float(a['p']):.4g} rad/s)",
         f"grid: {n_w} ω_p/p in [{spec.omega_ratio[0]:g}, {spec.omega_ratio[-1]:g}] × {n_a} a_p/(g tanα) in "
         f"[{spec.accel_ratio[0]:g}, {spec.accel_ratio[-1]:g}] = {n} cells in {seconds:.1f} s ({1e3 * seconds / n:.2f} ms/cell)",
-        *(_grid_line(o, getattr(spec, o.name)) for o in SUMMARY),
+        *(_grid_line(o, getattr(spec, o.name)) for o in SUMMARY if o.name != "uncertain"),
+        uncertain_line(spec.uncertain if computed(OUTPUTS["uncertain"], {"sensitivity": spec.sensitivity}) else None),
         "status: " + ", ".join(f"{STATUS_NAMES[k]} {int(c)}" for k, c in enumerate(np.bincount(spec.status.ravel(), minlength=len(STATUS_NAMES))) if c),
     ]
     for name, b in (("uplift", spec.uplift_boundary), ("overturning", spec.overturn_boundary)):
@@ -233,7 +253,10 @@ def solution_summary(sol, model) -> str:
     """One scene's summary outputs (`jaxrock.results.SUMMARY`), one per line, and its status."""
     from ..results import SUMMARY, status_names
 
-    lines = [o.line(np.asarray(getattr(sol, o.name))) for o in SUMMARY]
+    from ..outputs import computed
+
+    values = {o.name: np.asarray(getattr(sol, o.name)) for o in SUMMARY}
+    lines = [o.line(values[o.name]) if computed(o, values) else f"{o.label}: not computed" for o in SUMMARY]
     lines += [f"status: {status_names(sol.status)}",
               f"(α = {float(model.block.alpha_r):.5g} rad, p = {float(model.block.p_r):.5g} rad/s)"]
     return "\n".join(lines)
