@@ -46,7 +46,7 @@ _EXPORTS = {
     "fit_lognormal": "analyses.fragility",
     **dict.fromkeys(["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
                      "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
-                     "rm_target", "Sweep", "run_sweep", "least_overturning_scale", "Boundary", "find_boundary",
+                     "rm_target", "Sweep", "run_sweep", "least_overturning_scale", "overturning_probability", "Boundary", "find_boundary",
                      "boundary_slope"], "analyses"),
     "use_cpu_cores": "runtime",
     "calibration_report": "reports",  # writes figures: matplotlib is imported with it

@@ -144,6 +144,12 @@ def record_spectrum_files(rs, out: Path, label: str, title: str) -> tuple[Path, 
     return nc, csv_path, png
 
 
+def _count(x) -> int | float:
+    """A count of overturned observations: an integer, or a sum of probabilities (an ensemble's)."""
+    v = float(x)
+    return int(v) if v == int(v) else v
+
+
 def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
     """Write a record suite (`jaxrock.analyses.suite.run_suite`) into the folder `out`: the dataset
     `suite.zarr` (xarray.open_zarr), `least_scale.csv`, the fragility table `fragility.csv` and
@@ -187,9 +193,9 @@ def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
         vals = {d: float(one[d]) for d in cells}
         rows.append({"model": str(one.model.values), **fixed, **vals, "im": im, "median": m, "median_5": float(m_lo), "median_95": float(m_hi),
                      "beta": b, "beta_5": float(b_lo), "beta_95": float(b_hi), "n": int(one.fragility_n),
-                     "n_overturned": int(one.fragility_n_overturned), "n_failed": int(one.fragility_n_failed)})
+                     "n_overturned": _count(one.fragility_n_overturned), "n_failed": int(one.fragility_n_failed)})
         md.append(f"| {one.model.values} | " + " | ".join(f"{v:g}" for v in vals.values()) + f" | {m:.4g} | {m_lo:.4g}–{m_hi:.4g} | "
-                  f"{b:.3f} | {b_lo:.3f}–{b_hi:.3f} | {int(one.fragility_n_overturned)} / {int(one.fragility_n)} | {int(one.fragility_n_failed)} |")
+                  f"{b:.3f} | {b_lo:.3f}–{b_hi:.3f} | {_count(one.fragility_n_overturned):g} / {int(one.fragility_n)} | {int(one.fragility_n_failed)} |")
     files["fragility"] = write_table(out / "fragility.csv", rows)
     note = (f"Lognormal fragility P = Φ(ln(x/θ)/β) by maximum likelihood of every record × factor outcome of the sweep "
             f"(Baker 2015, multiple stripes), x = {im}; intervals: bootstrap over records ({ds.fragility_median_boot.sizes['bootstrap']} "

@@ -128,6 +128,7 @@ def builtin_record_names() -> str:
 HEIGHT_RANGE = (1e-12, 1e12)
 TAN_ALPHA_MIN = 1e-3
 MAX_REFINE = 40  # bisections of a boundary or a least scale: the step / 2^40 is below what a verdict resolves
+MAX_ENSEMBLE = 1024  # perturbed runs per uncertain verdict (`jaxrock.analyses.suite.overturning_probability`)
 
 
 def check_slenderness(height, tan_alpha, tan_alpha_base=None) -> None:

@@ -4,6 +4,8 @@ fragility fit (recovering a known curve)."""
 
 from pathlib import Path
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
@@ -170,6 +172,53 @@ def test_fragility_fit_recovers_a_known_lognormal():
     assert np.array_equal(again["median_boot"], fit["median_boot"]) and np.array_equal(again["beta_boot"], fit["beta_boot"])
 
 
+def test_fragility_fit_takes_probabilities_as_their_ensembles():
+    """An uncertain observation enters as the fraction q of its ensemble that overturned: the fit
+    on fractions is the fit on the ensembles' runs themselves (each of 4 runs an observation, the
+    bootstrap still over records), bools are the special case q ∈ {0, 1}, and a value outside
+    [0, 1] is refused."""
+    x, y, g = (a.ravel() for a in _synthetic(40))
+    rng = np.random.default_rng(5)
+    runs = np.where(rng.random(x.size) < 0.3, rng.random((4, x.size)) < 0.5, np.broadcast_to(y, (4, x.size)))  # 4 perturbed runs each
+    q = runs.mean(0)
+    assert np.any((q > 0) & (q < 1))
+    frac = jr.fit_lognormal(x, q, g, n_boot=50)
+    each = jr.fit_lognormal(np.tile(x, 4), runs.ravel(), np.tile(g, 4), n_boot=50)
+    for key in ("median", "beta"):
+        assert frac[key] == pytest.approx(each[key], rel=1e-9), key
+    np.testing.assert_allclose(frac["median_boot"], each["median_boot"], rtol=1e-8)
+    assert frac["n_overturned"] == pytest.approx(q.sum()) and frac["n"] == x.size
+    assert jr.fit_lognormal(x, y.astype(float), g, n_boot=0)["median"] == pytest.approx(jr.fit_lognormal(x, y, g, n_boot=0)["median"], rel=1e-12)
+    with pytest.raises(jr.JaxrockInputError, match="probability in"):
+        jr.fit_lognormal(x, q * 1.5, g)
+
+
+def test_an_uncertain_verdict_becomes_its_ensembles_probability():
+    """El Centro on a 1.5 m column (tanα 0.2), factors around 1.95× its uplift factor, where the
+    verdict turns at ×(1 ± 1e-9): `overturning_probability` keeps each certain verdict and gives
+    each uncertain one the fraction of its 16 perturbed runs that overturn — the same fraction as
+    `run_batch` of those factors directly, strictly between 0 and 1 for at least one run; the
+    fragility fitted on them counts the probabilities."""
+    rec = jr.el_centro()
+    uplift = 9.81 * 0.2 / float(np.max(np.abs(np.asarray(rec.acc))))
+    sweep = jr.Sweep.make("rigid", records=[rec], height=1.5, tan_alpha=0.2, scale=uplift * np.array([1.2, 1.95, 2.6]),
+                          sensitivity=True)
+    ds = jr.least_overturning_scale(sweep, refine=0, progress=False)
+    doubt = ds.uncertain.values
+    assert doubt.any()
+    p = jr.overturning_probability(sweep, ds, 16)
+    np.testing.assert_array_equal(p[~doubt], ds.overturned.values[~doubt].astype(float))
+    model = jr.RigidModel(jr.Block.from_slenderness(1.5, 0.2))
+    for i in np.flatnonzero(doubt.ravel()):
+        k = float(ds.scale.values[i]) * (1 + 1e-7 * np.linspace(-1, 1, 16))
+        direct = jr.run_batch(model, jax.vmap(rec.scaled)(jnp.asarray(k)))
+        assert p.ravel()[i] == pytest.approx(np.mean(np.asarray(direct.overturned)), abs=1 / 16 + 1e-12)  # batch neighbours' last bits
+    assert np.any((p > 0) & (p < 1)), p
+    ds["p_overturn"] = (sweep.dims, p)
+    frag = jr.analyses.suite.suite_fragility(ds, jr.suite_measures(sweep.records), "scale", n_boot=0)
+    assert float(frag.n_overturned.values.ravel()[0]) == pytest.approx(p.sum())
+
+
 def test_fragility_edge_cases():
     x = np.geomspace(0.1, 3.0, 20)
     none = jr.fit_lognormal(x, np.zeros(20, bool), n_boot=10)
@@ -215,7 +264,7 @@ def test_suite_command_writes_the_dataset_tables_and_figures(tmp_path):
 
     recs = ["arl360"]
     args = ("suite", *recs, "elcentro", "--model", "rigid", "--height", "1,4", "--scale", "0.5:3:6", "--refine", "3",
-            "--boot", "50", "--out", tmp_path / "s", "-q")
+            "--boot", "50", "--ensemble", "8", "--out", tmp_path / "s", "-q")
     r = invoke(*args)
     assert r.exit_code == 0, r.output
     for name in ("suite.zarr", "least_scale.csv", "least_scale.png", "fragility.csv", "fragility.md", "fragility.png", "rigid.zarr"):
@@ -226,9 +275,12 @@ def test_suite_command_writes_the_dataset_tables_and_figures(tmp_path):
     for i, row in enumerate(rows):
         one = ds.isel(model=0, height=i)
         x = one.scale.values[None, :] * one.pga.values[:, None]
-        fit = jr.fit_lognormal(x, one.overturned.values, np.repeat(np.arange(x.shape[0])[:, None], x.shape[1], 1), n_boot=50)
+        # the outcomes: each run's verdict, an uncertain one's ensemble fraction (--ensemble)
+        p = one.p_overturn.values
+        np.testing.assert_array_equal(p[~one.uncertain.values], one.overturned.values[~one.uncertain.values])
+        fit = jr.fit_lognormal(x, p, np.repeat(np.arange(x.shape[0])[:, None], x.shape[1], 1), n_boot=50)
         assert float(row["median"]) == fit["median"] and float(row["beta"]) == fit["beta"]
-        assert int(row["n_overturned"]) == int(one.overturned.sum())
+        assert float(row["n_overturned"]) == pytest.approx(p.sum())
     least_rows = read_csv(tmp_path / "s" / "least_scale.csv")
     assert all(np.isfinite(float(row["least_scale"])) == (row["bracket_low"] != "nan") for row in least_rows)
     # every run's verdict judged (the suite's default): its flag is its own numbers', and a least
@@ -254,6 +306,8 @@ def test_suite_command_writes_the_dataset_tables_and_figures(tmp_path):
     (["--height", "0"], "height"),
     (["--boot", "0"], "--boot"),
     (["nowhere/x.AT2"], "records"),
+    (["--ensemble", "-1"], "--ensemble"),
+    (["--ensemble", "4", "--no-sensitivity"], "--ensemble"),
 ])
 def test_suite_command_refuses_bad_input_in_one_line(tmp_path, args, words):
     from helpers import invoke

@@ -11,7 +11,8 @@
 - `boundary`: overturning boundaries by gradient — Newton on the margin (1 − max|θ|/α′)² along a
   parameter (`find_boundary`), and a boundary's implicit derivative (`boundary_slope`);
 - `suite`: the least overturning scale of every record of a suite for every column, by vmapped
-  bisection (`least_overturning_scale`).
+  bisection (`least_overturning_scale`); an uncertain verdict's probability from an ensemble of
+  perturbed runs (`overturning_probability`).
 """
 
 from .boundary import Boundary, boundary_slope, find_boundary, margin
@@ -19,10 +20,10 @@ from .calibration import CalibrationResult, calibrate_cbar, fit_power_law
 from .free_rocking import energy_ratio, energy_ratio_grid, rm_target
 from .engine import run_batch
 from .scenes import run_scenes
-from .suite import least_overturning_scale
+from .suite import least_overturning_scale, overturning_probability
 from .sweep import Sweep, run_sweep
 from .spectra import RecordSpectrum, Spectrum, overturning_spectrum, record_overturning_scale, refine_boundaries
 
 __all__ = ["run_batch", "Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries",
            "run_scenes", "CalibrationResult", "calibrate_cbar", "energy_ratio", "energy_ratio_grid", "fit_power_law", "rm_target", "Sweep", "run_sweep",
-           "least_overturning_scale", "Boundary", "find_boundary", "boundary_slope", "margin"]
+           "least_overturning_scale", "overturning_probability", "Boundary", "find_boundary", "boundary_slope", "margin"]

@@ -52,8 +52,8 @@ def _fit_weighted(lnx: np.ndarray, y: np.ndarray, w: np.ndarray, iterations: int
     a, b = -mean / 0.5, np.full(S, 2.0)
     b_max = 1.0 / BETA_MIN
 
-    def ll(a, b):
-        return (w * _loglik_terms(a, b, lnx, y)).sum(1)
+    def ll(a, b):  # an observation of weight 0 adds nothing, even where its term is −inf
+        return np.where(w > 0, w * _loglik_terms(a, b, lnx, y), 0.0).sum(1)
 
     cur = ll(a, b)
     for _ in range(iterations):
@@ -83,30 +83,36 @@ def _fit_weighted(lnx: np.ndarray, y: np.ndarray, w: np.ndarray, iterations: int
 
 def fit_lognormal(im, overturned, group=None, *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     """The lognormal fragility (module docstring) of the observations `im` (intensities > 0) and
-    `overturned` (bools), with a bootstrap over `group` (the record of each observation; None:
-    each observation its own). Returns a dict:
+    `overturned` (bools, or probabilities in [0, 1]: an observation whose verdict is uncertain
+    enters as the fraction q of an ensemble of perturbed runs that overturned, i.e. q of an
+    overturning and 1 − q of a standing observation in the binomial likelihood), with a bootstrap
+    over `group` (the record of each observation; None: each observation its own). Returns a dict:
 
     - `median` θ and `beta` β of the fit of all observations;
     - `median_boot`, `beta_boot`: the `n_boot` bootstrap fits (seeded by `seed`: the same bits every run);
     - `median_ci`, `beta_ci`: their 5–95 % percentiles;
-    - `n`: the observations, `n_overturned`: those that overturned.
+    - `n`: the observations, `n_overturned`: those that overturned (the sum of the probabilities).
 
     Outcomes all alike (none or every one overturned) have no fit: θ and β are NaN then, and so is
     a bootstrap sample's fit that is all alike."""
     x = np.asarray(im, dtype=float).ravel()
-    y = np.asarray(overturned, dtype=bool).ravel()
-    if x.shape != y.shape:
-        raise JaxrockInputError(f"im and overturned: {x.size} and {y.size} values; give one outcome per intensity")
+    q = np.asarray(overturned).ravel().astype(float)
+    if x.shape != q.shape:
+        raise JaxrockInputError(f"im and overturned: {x.size} and {q.size} values; give one outcome per intensity")
     if x.size == 0 or not np.all(np.isfinite(x) & (x > 0)):
         raise JaxrockInputError("im: every intensity must be a finite number > 0")
+    if not np.all((q >= 0) & (q <= 1)):
+        raise JaxrockInputError("overturned: every outcome must be a bool or a probability in [0, 1]")
     g = np.arange(x.size) if group is None else np.unique(np.asarray(group).ravel(), return_inverse=True)[1].ravel()
     if g.size != x.size:
         raise JaxrockInputError(f"group: {g.size} values for {x.size} observations")
     n_groups = int(g.max()) + 1
     rng = np.random.default_rng(seed)
     counts = np.vstack([np.ones(n_groups), rng.multinomial(n_groups, np.full(n_groups, 1.0 / n_groups), size=int(n_boot))])
-    w = counts[:, g]  # weight of each observation in each sample: its record's multiplicity
-    lnx = np.log(x)
+    # each observation twice: overturned with weight q, standing with weight 1 − q (a bool: one of them 0)
+    w = np.concatenate([counts[:, g] * q, counts[:, g] * (1.0 - q)], axis=1)  # times its record's multiplicity
+    lnx = np.log(np.concatenate([x, x]))
+    y = np.concatenate([np.ones(x.size, bool), np.zeros(x.size, bool)])
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the all-alike samples diverge (NaN below)
         a, b = _fit_weighted(lnx, y, w)
     hits = (w * y).sum(1)
@@ -122,7 +128,7 @@ def fit_lognormal(im, overturned, group=None, *, n_boot: int = N_BOOT, seed: int
     median = np.where(alike, np.nan, np.where(separated, np.exp(0.5 * (below + above)), median))
     pct = lambda v: np.nanpercentile(v, [5.0, 95.0]) if np.isfinite(v).any() else np.array([np.nan, np.nan])
     return {"median": float(median[0]), "beta": float(beta[0]), "median_boot": median[1:], "beta_boot": beta[1:],
-            "median_ci": pct(median[1:]), "beta_ci": pct(beta[1:]), "n": int(x.size), "n_overturned": int(y.sum())}
+            "median_ci": pct(median[1:]), "beta_ci": pct(beta[1:]), "n": int(x.size), "n_overturned": float(q.sum())}
 
 
 def probability(x, median, beta):

@@ -24,7 +24,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import JaxrockInputError, check_grid
-from ..scene import MAX_REFINE
+from ..outputs import PERTURBATION
+from ..scene import MAX_ENSEMBLE, MAX_REFINE
 from .sweep import Sweep, on_devices, run_sweep, run_values
 
 BISECTION_CELLS = 256  # the least batch of a bisection round (records grouped to reach it)
@@ -161,6 +162,27 @@ class _Bisections:
             write_atomically(self.path, write)
 
 
+def overturning_probability(sweep: Sweep, ds, n: int, devices=None) -> np.ndarray:
+    """The probability that each run of the record sweep `sweep` overturns (over `sweep.dims`):
+    its verdict (0 or 1) where certain; where `ds.uncertain` (the sweep's dataset, made with
+    `sensitivity=True`), the fraction of an ensemble of `n` runs at the scale × (1 + δ t), t
+    equally spaced in [−1, 1] and δ = `PERTURBATION` (the perturbation the flag answers for),
+    that overturn: one batch of vmapped lanes for every uncertain run."""
+    import dataclasses
+
+    over = ds.overturned.transpose(*sweep.dims).values.astype(float)
+    idx = np.flatnonzero(ds.uncertain.transpose(*sweep.dims).values)
+    if idx.size == 0 or int(n) < 1:
+        return over
+    every = sweep.values_at(tuple(slice(0, len(sweep.axes[d])) for d in sweep.dims))
+    v = {k: np.repeat(a[idx], int(n)) for k, a in every.items()}
+    v["scale"] = v["scale"] * (1.0 + PERTURBATION * np.tile(np.linspace(-1.0, 1.0, int(n)), idx.size))
+    out = run_values(dataclasses.replace(sweep, sensitivity=False), v, devices)
+    p = over.ravel()
+    p[idx] = out["overturned"].reshape(idx.size, int(n)).mean(axis=1)
+    return p.reshape(over.shape)
+
+
 def _check_im(im: str) -> None:
     from ..intensity import SCALING
 
@@ -174,7 +196,9 @@ def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None,
     measure of `jaxrock.intensity.SCALING` ("pga", "pgv", "pgd", "arias"; of the scaled record:
     factor^power × the record's measure, from `measures`, `suite_measures`) or "scale" (the
     factor itself). The observations are every record × factor of the sweep whose run ended ok
-    (the others are counted in `n_failed`); the bootstrap resamples records. Returns an
+    (the others are counted in `n_failed`), each its verdict, or its `p_overturn` where `ds` has
+    one (`overturning_probability`: an uncertain verdict's ensemble fraction); the bootstrap
+    resamples records. Returns an
     `xarray.Dataset` over the sweep's axes without `record` and `scale`: `median` [the measure's
     units], `beta`, their 5–95 % intervals (`median_ci`, `beta_ci`, dimension `bound`), the
     bootstrap fits (`median_boot`, `beta_boot`, dimension `bootstrap`), `n`, `n_overturned`, `n_failed`."""
@@ -193,7 +217,7 @@ def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None,
         x = scale[None, :] ** SCALING[im] * measures[im].sel(record=ds.record).values[:, None]
         units = MEASURES[im][1]
     group = np.broadcast_to(np.arange(ds.sizes["record"])[:, None], x.shape)
-    over = ds.overturned.transpose("record", ..., "scale").values
+    over = (ds.p_overturn if "p_overturn" in ds else ds.overturned).transpose("record", ..., "scale").values
     status = ds.status.transpose("record", ..., "scale").values
     cell_shape = over.shape[1:-1]
     fits = []
@@ -221,7 +245,8 @@ def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None,
             "median_boot": ((*dims, "bootstrap"), get("median_boot"), {"long_name": "median of each bootstrap fit", "units": units}),
             "beta_boot": ((*dims, "bootstrap"), get("beta_boot"), {"long_name": "beta of each bootstrap fit", "units": "1"}),
             "n": (dims, get("n").astype(np.int32), {"long_name": "observations (record x factor runs ending ok)"}),
-            "n_overturned": (dims, get("n_overturned").astype(np.int32), {"long_name": "observations that overturned"}),
+            "n_overturned": (dims, get("n_overturned"), {"long_name": "observations that overturned (an uncertain one counts its "
+                                                                         "probability where the sweep has p_overturn)"}),
             "n_failed": (dims, get("n_failed").astype(np.int32), {"long_name": "runs left out: status not ok"}),
         },
         coords={**{d: ds[d] for d in dims}, "bound": ("bound", np.array([5.0, 95.0]), {"units": "percent"})},
@@ -240,7 +265,8 @@ def check_motion(records) -> None:
 
 
 def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boot: int | None = None, store_dir=None,
-              progress: bool = True, history: str | None = None, integrator=None, sensitivity: bool = True, **quantities):
+              progress: bool = True, history: str | None = None, integrator=None, sensitivity: bool = True, ensemble: int = 0,
+              **quantities):
     """A record suite for each model kind of `models` (e.g. ("rigid", "spring", "spring-flexible")):
     the record sweep of `records` × `quantities` (the column's axes or fixed values, as `Sweep.make`)
     × `scale`, its least overturning factors (`least_overturning_scale`, `refine` bisections) and
@@ -249,7 +275,9 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
     `store_dir`: each model's sweep is kept in `<store_dir>/<model>.zarr` (a rerun resumes it).
     `sensitivity` (default on: record runs are where verdicts turn chaotic): every run reports its
     sensitivity and whether its verdict is uncertain, and each column whether its least factor is
-    (`least_scale_uncertain`; `jaxrock.sensitivity`)."""
+    (`least_scale_uncertain`; `jaxrock.sensitivity`). `ensemble` > 0 (with the sensitivity): each
+    uncertain run is replaced by the fraction of `ensemble` perturbed runs that overturn
+    (`p_overturn`, `overturning_probability`), and the fragility is fitted on those fractions."""
     from pathlib import Path
 
     import xarray as xr
@@ -263,12 +291,21 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
     check_grid("scale (record factors)", scale)  # the least overturning factor is the first of them that overturns
     _check_im(im)
     check_motion(records)
+    if not 0 <= int(ensemble) <= MAX_ENSEMBLE:
+        raise JaxrockInputError(f"ensemble = {ensemble}; valid: an integer in [0, {MAX_ENSEMBLE}] (0: the verdicts as they are)")
+    if int(ensemble) and not sensitivity:
+        raise JaxrockInputError("ensemble: replaces the uncertain verdicts, which only a run with its sensitivity finds; drop "
+                                "sensitivity=False (--no-sensitivity)")
     sweeps = [Sweep.make(m, records=records, scale=scale, integrator=integrator, sensitivity=sensitivity, **quantities) for m in models]  # every input checked first
     measures = suite_measures(sweeps[0].records)
     parts = []
     for m, sweep in zip(models, sweeps):
         store = None if store_dir is None else Path(store_dir) / f"{m}.zarr"
         ds = least_overturning_scale(sweep, store, refine=refine, progress=progress, history=history)
+        if int(ensemble):
+            p = overturning_probability(sweep, ds, int(ensemble))
+            ds["p_overturn"] = (sweep.dims, p, {"long_name": f"probability of overturning: the verdict, or where uncertain the fraction "
+                                                             f"of {int(ensemble)} runs at the scale x (1 +- {PERTURBATION:g}) that overturn", "units": "1"})
         frag = suite_fragility(ds, measures, im, n_boot=n_boot)
         parts.append(xr.merge([ds, frag.rename({k: f"fragility_{k}" for k in frag.data_vars})], combine_attrs="override"))
     out = xr.concat(parts, dim=xr.DataArray(np.asarray(list(models), dtype=object), dims="model", name="model"),  # object: a Zarr v3 string
@@ -279,4 +316,4 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
     return out
 
 
-__all__ = ["check_motion", "least_overturning_scale", "suite_fragility", "run_suite"]
+__all__ = ["check_motion", "least_overturning_scale", "overturning_probability", "suite_fragility", "run_suite"]

@@ -18,7 +18,7 @@ from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untru
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds,
                      CELL_SECONDS, SENSITIVITY_COST)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
-from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_REFINE, MODEL_PARAMETERS, PULSES,
+from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_ENSEMBLE, MAX_REFINE, MODEL_PARAMETERS, PULSES,
                      RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, parameter_help)
 from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
                       _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary, SENSITIVITY_HELP,
@@ -482,6 +482,8 @@ def suite(
     out: Path = typer.Option(Path("out/suite"), help="output folder: suite.zarr, least_scale.csv/.png, fragility.csv/.md/.png, "
                              "and each model's sweep store <model>.zarr (a rerun resumes it)"),
     sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
+    ensemble: int = typer.Option(0, help=f"replace each uncertain verdict by the fraction of this many runs at its factor x (1 ± 1e-7) "
+                                 f"that overturn, and fit the fragility on those fractions (0 to {MAX_ENSEMBLE}; 0: the verdicts)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a suite estimated beyond 1 h"),
@@ -500,6 +502,10 @@ def suite(
     _check_refine(refine)
     _check_count("--boot", boot)
     _check_im(im)
+    if not 0 <= ensemble <= MAX_ENSEMBLE:
+        raise JaxrockInputError(f"--ensemble = {ensemble}; valid: an integer in [0, {MAX_ENSEMBLE}] (0: the verdicts as they are)")
+    if ensemble and not sensitivity:
+        raise JaxrockInputError("--ensemble replaces the uncertain verdicts, which only --sensitivity finds: drop --no-sensitivity")
     given = {}
     for name, text in (("height", height), ("tan_alpha", tan_alpha)):
         v = parse_values("--" + name.replace("_", "-"), text)
@@ -535,7 +541,7 @@ def suite(
     t0 = time.perf_counter()
     try:
         ds = run_suite(kinds, recs, scale=sc, refine=refine, im=im, n_boot=boot, store_dir=out, progress=not quiet,
-                       history=_history(), sensitivity=sensitivity, **given)
+                       history=_history(), sensitivity=sensitivity, ensemble=ensemble, **given)
     except Interrupted:
         kept = ", ".join(f"{out / f'{k}.zarr'} ({zstore.kept_scenes(out / f'{k}.zarr'):,} runs)" for k in kinds if (out / f"{k}.zarr").is_dir())
         typer.echo(f"interrupted: the sweeps kept in {kept or 'no store yet'}; resume with: {_resume_command()}", err=True)
