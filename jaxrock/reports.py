@@ -138,6 +138,8 @@ def record_spectrum_files(rs, out: Path, label: str, title: str) -> tuple[Path, 
     nc = rs.save(Path(f"{out}.nc"))
     csv_path = Path(f"{out}.csv")
     rows = [{"height": float(h), "least_scale": float(s), "bracket_low": float(lo)} for h, s, lo in zip(rs.height, rs.scale, rs.bracket_low)]
+    if rs.uncertain is not None:
+        rows = [{**row, "uncertain": int(u)} for row, u in zip(rows, rs.uncertain)]
     write_table(csv_path, rows)
     png = Path(f"{out}.png")
     plt.close(plot_record_spectrum([rs], [label], path=png, title=title))

@@ -150,6 +150,30 @@ def test_batch_round_trip_and_resume(tmp_path):
     assert r.exit_code == 2 and "row 2" in r.output
 
 
+def test_batch_sensitivity_writes_each_rows_tangent_and_doubt(tmp_path):
+    """`--sensitivity`: each row's sensitivity is `simulate(..., sensitivity=True)`'s and its
+    `uncertain` flag its own numbers'; the summary counts the uncertain rows. Without it the
+    columns read NaN and 0 and the summary does not count them."""
+    scenes = write(tmp_path / "scenes.csv", SCENES)
+    r = invoke("batch", scenes, tmp_path / "r.csv", "--quiet", "--sensitivity")
+    assert r.exit_code == 0, r.output
+    rows = read_csv(tmp_path / "r.csv")
+    for x in rows:
+        h = float(x["height"])
+        ta = float(x["tan_alpha"]) if x["tan_alpha"] else float(x["width"]) / h
+        block = jr.Block.from_slenderness(h, ta)
+        a_p = float(x["a_p"]) if x["a_p"] else float(x["accel_ratio"]) * 9.81 * ta
+        w = float(x["omega_p"]) if x["omega_p"] else float(x["omega_ratio"]) * float(block.p)
+        eta = float(x["eta"]) if x["eta"] else float(block.eta)
+        sol = jr.simulate(jr.RigidModel(block, eta=jnp.asarray(eta)), jr.RickerPulse(a_p, w), sensitivity=True)
+        assert float(x["sensitivity"]) == pytest.approx(float(sol.sensitivity), rel=1e-6)
+        assert int(x["uncertain"]) == int(jr.verdict_uncertain(float(x["sensitivity"]), float(x["max_theta"]), bool(int(x["overturned"]))))
+    assert f"verdict uncertain: {sum(int(x['uncertain']) for x in rows)}" in r.output, r.output
+    r = invoke("batch", scenes, tmp_path / "plain.csv", "--quiet")
+    assert r.exit_code == 0 and "verdict uncertain" not in r.output, r.output
+    assert all(x["sensitivity"] == "nan" and x["uncertain"] == "0" for x in read_csv(tmp_path / "plain.csv"))
+
+
 def test_a_group_runs_in_chunks_of_like_intensity(tmp_path, monkeypatch):
     """Rows alternating between a pulse below the uplift level (the block stays at rest) and one far
     above it (it overturns), run in chunks of 4: each chunk holds one kind, so no chunk waits on

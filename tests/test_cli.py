@@ -25,7 +25,7 @@ _jit_sim = eqx.filter_jit(jr.simulate)
 def test_spectrum_writes_nc_equal_to_library_and_png(tmp_path):
     """`--out sp/` (a trailing separator) writes inside the folder sp (it wrote sp.nc beside it)."""
     r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
-               "--accel-min", 0.8, "--accel-max", 6, "--out", f"{tmp_path}/sp/", "--quiet")
+               "--accel-min", 0.8, "--accel-max", 6, "--out", f"{tmp_path}/sp/", "--quiet", "--sensitivity")
     assert r.exit_code == 0, r.output
     assert (tmp_path / "sp" / "spectrum.png").stat().st_size > 1000
     assert sorted(f.name for f in (tmp_path / "sp").iterdir()) == ["spectrum.nc", "spectrum.png"]  # no checkpoint, lock or temporary left
@@ -40,7 +40,7 @@ def test_spectrum_writes_nc_equal_to_library_and_png(tmp_path):
     np.testing.assert_array_equal(spec.status, ref.status)
     assert "9 cells" in r.output and "overturned:" in r.output and "status: ok" in r.output
     assert f"overturned: {int(ref.overturned.sum())} cells" in r.output
-    # every cell's verdict judged (the command's default; the library's is off): the flag of its own numbers
+    # every cell's verdict judged (--sensitivity; the library's spectrum without it): the flag of its own numbers
     assert np.all(np.isfinite(spec.sensitivity)) and np.all(np.isnan(ref.sensitivity)) and not ref.uncertain.any()
     np.testing.assert_array_equal(spec.uncertain, jr.verdict_uncertain(spec.sensitivity, spec.max_theta, spec.overturned))
     assert f"verdict uncertain: {int(spec.uncertain.sum())} of 9 cells" in r.output, r.output
@@ -203,8 +203,10 @@ def test_record_spectrum_equals_library(tmp_path):
     assert r.exit_code == 0, r.output
     rows = read_csv(tmp_path / "rs" / "record_spectrum.csv")
     ref = record_overturning_scale(jr.RigidModel(jr.Block.from_slenderness(1.0, 0.2)), jr.read_record(rec_file),
-                                   [1.0, 4.0], np.linspace(0.5, 8, 4), refine=3, progress=False)
+                                   [1.0, 4.0], np.linspace(0.5, 8, 4), refine=3, progress=False, sensitivity=True)
     np.testing.assert_allclose([float(x["least_scale"]) for x in rows], ref.scale)
+    assert [int(x["uncertain"]) for x in rows] == [int(u) for u in ref.uncertain]  # every verdict judged (the default)
+    assert f"verdict uncertain: {int(np.sum(ref.uncertain))} of 2 least factor(s)" in r.output, r.output
     assert sorted(f.name for f in (tmp_path / "rs").iterdir()) == [f"record_spectrum.{x}" for x in ("csv", "nc", "png")]
 
 

@@ -62,6 +62,22 @@ def test_pulse_sweep_is_the_spectrum(tmp_path):
     assert xr.open_zarr(tmp_path / "s.zarr", chunks=None).max_theta.encoding["chunks"] == (1, 6)  # one Zarr chunk per sweep chunk
 
 
+def test_a_sweep_with_sensitivity_is_the_spectrum_with_it_and_keeps_its_own_store(tmp_path):
+    """`Sweep(..., sensitivity=True)`: the spectrum's sensitivities and uncertain flags, cell for cell
+    (the same batches); its store says so, and a store made without them is refused, not resumed."""
+    wr, ar = np.linspace(1.0, 12.0, 4), np.linspace(0.8, 8.0, 3)
+    model = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
+    spec = jr.overturning_spectrum(model, wr, ar, progress=False, sensitivity=True)
+    sw = Sweep.make("rigid", accel_ratio=ar, omega_ratio=wr, chunk_size=4, sensitivity=True)
+    ds = run_sweep(sw, tmp_path / "s.zarr", progress=False)
+    np.testing.assert_allclose(ds.sensitivity.values, spec.sensitivity, rtol=1e-9)
+    assert np.all(np.isfinite(ds.sensitivity.values)) and np.array_equal(ds.uncertain.values, spec.uncertain)
+    assert json.loads(ds.attrs["made_by"])["sensitivity"] == "True"
+    plain = Sweep.make("rigid", accel_ratio=ar, omega_ratio=wr, chunk_size=4)
+    with pytest.raises(jr.JaxrockInputError):
+        run_sweep(plain, tmp_path / "s.zarr", progress=False)
+
+
 def test_record_sweep_over_sizes_matches_single_runs():
     """Two records of different lengths × 2 sizes × 2 slendernesses × 2 factors, a chunk holding
     several models (vmapped models): each scene as `jaxrock.simulate` gives it (to the event

@@ -69,7 +69,7 @@ def _description(scenes: Scenes) -> dict[str, str]:
 
 
 def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: int = 256, progress: bool = True,
-               force: bool = False) -> BatchReport:
+               force: bool = False, sensitivity: bool = False) -> BatchReport:
     """Run every scene of `scenes_path` and write `results_path` (see the module docstring).
 
     All rows are checked first (a `JaxrockInputError` names a bad row and its column).
@@ -77,7 +77,8 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
     once `<results>.made_by.json` shows they were made by this package version from the same
     record contents (else a `JaxrockInputError` names the difference). An existing file without
     that description beside it is not a results file of a batch run: it is overwritten only with
-    `force`.
+    `force`. `sensitivity`: every run reports its sensitivity and whether its verdict is uncertain
+    (`jaxrock.sensitivity`; else those columns read NaN and 0).
     """
     if int(chunk_size) < 1:
         raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
@@ -95,12 +96,12 @@ def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: i
         raise JaxrockInputError(f"results file {results} exists and is not the results of a batch run (no {results.name}.made_by.json "
                                 f"beside it); pass --force to overwrite it, or name another path")
     with exclusive(results, "results file"):
-        return _run(scenes, header, results, resume, chunk_size, progress, t0)
+        return _run(scenes, header, results, resume, chunk_size, progress, t0, bool(sensitivity))
 
 
-def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> BatchReport:
+def _run(scenes, header, results: Path, resume, chunk_size, progress, t0, sensitivity: bool) -> BatchReport:
     """`run_scenes` on checked scenes, the results file held."""
-    made_by = _description(scenes)
+    made_by = {**_description(scenes), "sensitivity": str(sensitivity)}
     sidecar = results.with_name(results.name + ".made_by.json")
     done = read_done(results, header, scenes) if resume else {}
     if done:
@@ -122,7 +123,7 @@ def _run(scenes, header, results: Path, resume, chunk_size, progress, t0) -> Bat
         for part in _chunks(list(idx), chunk_size):
             interrupt.stop_point()
             index = np.asarray(part + [part[0]] * (_pad_size(len(part), chunk_size) - len(part)))
-            sol = run_batch(scenes.model(kind, index), scenes.excitation(exc, index), model_batched=True)
+            sol = run_batch(scenes.model(kind, index), scenes.excitation(exc, index), model_batched=True, sensitivity=sensitivity)
             records = [{"row": str(int(scenes.rows[i])), **scenes.values[i], **res} for i, res in zip(part, result_rows(sol, len(part)))]
             append_results(results, fields, records)
             new.update({int(rec["row"]): rec for rec in records})

@@ -262,12 +262,15 @@ class RecordSpectrum(eqx.Module):
 
     `scale[i]` is the least factor of the sweep (refined by bisection to `tolerance`) that
     overturns the body of height `height[i]`; +inf where no factor of the sweep overturns it.
+    `uncertain[i]`: a run that decided it has an uncertain verdict (`jaxrock.sensitivity`; None:
+    not computed).
     """
 
     height: np.ndarray
     scale: np.ndarray
     bracket_low: np.ndarray
     attrs: dict
+    uncertain: np.ndarray | None = None
 
     def save(self, path) -> Path:
         import xarray as xr
@@ -278,6 +281,9 @@ class RecordSpectrum(eqx.Module):
             {
                 "scale": (("height",), self.scale, {"long_name": "least overturning scale factor", "units": "1"}),
                 "bracket_low": (("height",), self.bracket_low, {"long_name": "largest scale below it that does not overturn", "units": "1"}),
+                **({} if self.uncertain is None else {"uncertain": (("height",), np.asarray(self.uncertain, np.int8), {
+                    "long_name": "a run that decided the least scale has an uncertain verdict (jaxrock.sensitivity)", "units": "1",
+                    "flag_values": np.array([0, 1], np.int8), "flag_meanings": "certain uncertain"})}),
             },
             coords={"height": ("height", self.height, {"long_name": "2h", "units": "m"})},
             attrs={k: str(v) for k, v in self.attrs.items()},
@@ -294,6 +300,7 @@ def record_overturning_scale(
     refine: int = 12,
     integrator: AbstractIntegrator | None = None,
     progress: bool = True,
+    sensitivity: bool = False,
 ) -> RecordSpectrum:
     """Least factor of `record` that overturns `model`'s body, for each height in `heights`.
 
@@ -303,6 +310,8 @@ def record_overturning_scale(
     bisections (all heights in one vmapped batch) against the factor before it.
     Overturning is not monotone in the factor: an overturning window narrower than the sweep's
     step, below the first overturning factor found, is missed — refine the sweep to rule it out.
+    `sensitivity`: every run judges its verdict, and `uncertain` says which least factors an
+    uncertain run decided (`jaxrock.sensitivity`).
     """
     hs = check_grid("heights (2h) [m]", heights)
     sc = check_grid("scales (record factors)", scales)
@@ -311,9 +320,10 @@ def record_overturning_scale(
     block = model.block
     tan_a, tan_b = block.tan_alpha, block.b_base / block.h
     # a suite of one record: the model resized to each height, one chunk (one vmapped batch) per height
-    sweep = Sweep.make(model, records=[record], height=hs, scale=sc, integrator=integrator, chunk_size=sc.size)
+    sweep = Sweep.make(model, records=[record], height=hs, scale=sc, integrator=integrator, chunk_size=sc.size, sensitivity=sensitivity)
     ds = least_overturning_scale(sweep, refine=refine, progress=progress)
     least, low = ds.least_scale.values[0], ds.bracket_low.values[0]
     attrs = {"model": type(model).__name__, "record": record.name, "tan_alpha": float(tan_a), "tan_alpha_base": float(tan_b),
              **provenance.file_attrs(model, integrator)}
-    return RecordSpectrum(height=hs, scale=least, bracket_low=low, attrs=attrs)
+    return RecordSpectrum(height=hs, scale=least, bracket_low=low, attrs=attrs,
+                          uncertain=ds.least_scale_uncertain.values[0] if sensitivity else None)

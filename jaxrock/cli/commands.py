@@ -63,7 +63,8 @@ def spectrum(
     tol: Optional[float] = typer.Option(
         None, help="spring models: run generalized-α at this local tolerance in (0, 0.1), its global error checked by a run at 10x "
         "the tolerance (status inaccurate beyond 1e-2 in θ/α; see README); default: the model's default integrator"),
-    sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
+    sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP + "; off by default on pulses "
+                                     "(none of 240 seeded pulse cells changed verdict, benchmarks/study_uncertain.py)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),
@@ -222,6 +223,7 @@ def batch(
     results: str = typer.Argument(..., help="results CSV to write (a folder, or a path ending in /: <folder>/<scenes stem>_results.csv)"),
     resume: bool = typer.Option(False, "--resume", help="skip rows already in the results file"),
     chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
+    sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     force: bool = FORCE_OPTION,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
 ):
@@ -234,7 +236,7 @@ def batch(
     from ..interrupt import Interrupted
 
     try:
-        rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet, force=force)
+        rep = run_scenes(scenes, results, resume=resume, chunk_size=chunk_size, progress=not quiet, force=force, sensitivity=sensitivity)
     except Interrupted:
         typer.echo(f"interrupted: {count_results(results):,} rows kept in {results}; resume with: {_resume_command('--resume')}",
                    err=True)
@@ -271,6 +273,7 @@ def record_spectrum(
     refine: int = typer.Option(8, help="bisections refining the least overturning factor (resolution: sweep step / 2^refine)"),
     out: str = typer.Option("out/record_spectrum", help="output stem: <out>.nc, <out>.csv, <out>.png; a folder (or a path "
                             "ending in /) means <out>/record_spectrum.*"),
+    sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h"),
@@ -288,21 +291,23 @@ def record_spectrum(
     for suffix in (".nc", ".csv", ".png"):
         check_output("--out", Path(f"{out}{suffix}"))
     _hold(out, "--out")
-    per_run = record_run_seconds(model.value, float(exc.t_end - exc.t_start))
+    per_run = record_run_seconds(model.value, float(exc.t_end - exc.t_start)) * (SENSITIVITY_COST if sensitivity else 1.0)
     _estimate(hs.size * (sc.size + refine), model.value, yes, what="record runs", per_cell=per_run)
     from ..analyses.spectra import record_overturning_scale
     from ..reports import record_spectrum_files
 
     t0 = time.perf_counter()
-    rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet)
+    rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet, sensitivity=sensitivity)
     seconds = time.perf_counter() - t0
     rs = type(rs)(height=rs.height, scale=rs.scale, bracket_low=rs.bracket_low,
-                  attrs={**rs.attrs, "model_kind": model.value, "history": _history()})
+                  attrs={**rs.attrs, "model_kind": model.value, "history": _history()}, uncertain=rs.uncertain)
     nc, csv_path, png = record_spectrum_files(rs, out, f"{model.value}, tanα = {tan_alpha:g}", f"least overturning factor of {desc}")
     typer.echo(f"{desc}; {model.value} model, tanα = {tan_alpha:g}; {len(hs)} heights × {len(sc)} factors in {seconds:.1f} s")
     typer.echo(f"{'2h [m]':>8} {'least factor':>13}")
-    for h, s in zip(rs.height, rs.scale):
-        typer.echo(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}")
+    doubt = np.zeros(rs.height.size, bool) if rs.uncertain is None else np.asarray(rs.uncertain, bool)
+    for h, s, u in zip(rs.height, rs.scale, doubt):
+        typer.echo(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}{'  (uncertain)' if u else ''}")
+    typer.echo(uncertain_line(rs.uncertain, what="least factor(s)"))
     typer.echo(f"wrote {nc}, {csv_path}, {png}")
 
 
@@ -342,6 +347,7 @@ def sweep(
     scheduler: Optional[str] = typer.Option(None, help="address of a running Dask scheduler (tcp://host:8786): each chunk is a "
                                             "task of its workers, which write into --store (a folder they all see); needs "
                                             "jaxrock[distributed]"),
+    sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h or 2 GB"),
 ):
@@ -391,13 +397,15 @@ def sweep(
     from ..analyses.sweep import Sweep
 
     sw = Sweep.make(model.value, pulse=None if recs else pulse.value, records=recs, integrator=_integrator(model, tol),
-                    backbone=None if backbone is None else backbone.value, chunk_size=chunk_size, **given)
+                    backbone=None if backbone is None else backbone.value, chunk_size=chunk_size, sensitivity=sensitivity, **given)
+    dearer = SENSITIVITY_COST if sensitivity else 1.0
     if recs:
         seconds = max(float(r.t_end - r.t_start) for r in recs)
-        per_run = record_run_seconds(model.value, seconds)
+        per_run = record_run_seconds(model.value, seconds) * dearer
         _estimate(sw.size, model.value, yes, what="record runs", per_cell=per_run)
     else:
-        _estimate(sw.size, "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value, yes, what="scenes")
+        kind = "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value
+        _estimate(sw.size, kind, yes, what="scenes", per_cell=CELL_SECONDS[kind] * dearer)
     client = None
     if scheduler is not None:
         try:
@@ -437,6 +445,7 @@ def sweep(
                f"{ran:,} run in {seconds:.1f} s ({ran / seconds:,.0f} scenes/s with compilation) on {where}{resumed}")
     typer.echo(f"overturned: {int(ds.overturned.sum()):,} scenes ({100 * float(ds.overturned.mean()):.1f} %); uplifted: "
                f"{int(ds.uplifted.sum()):,}")
+    typer.echo(uncertain_line(ds.uncertain.values if sensitivity else None, what="scenes"))
     typer.echo(f"wrote {store}")
     _exit_if_untrusted(_status_counts(ds.status.values), "scene(s)")
 

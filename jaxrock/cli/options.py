@@ -155,7 +155,7 @@ def uncertain_line(flags, runs=None, what: str = "cells", n: int | None = None) 
     from ..outputs import PERTURBATION
 
     if flags is None:
-        return "verdict uncertain: not computed (--no-sensitivity)"
+        return "verdict uncertain: not computed (--sensitivity judges each verdict)"
     flags = np.asarray(flags, dtype=bool)
     n = flags.size if n is None else n
     behind = "" if runs is None else f"; {int(np.sum(runs))} of the sweep's {np.size(runs):,} runs"

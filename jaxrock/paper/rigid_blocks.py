@@ -95,13 +95,14 @@ def fig05_08(out: Path) -> list[Finding]:
 def fig06_09(out: Path, *, n: int = 32) -> list[Finding]:
     out = Path(out)
     w, a = np.linspace(1, 15, n), np.linspace(0.5, 10, n)
-    disagree = {}
+    disagree, doubt = {}, {6: 0, 9: 0}
     for fig, damped in ((6, False), (9, True)):
         spectra, titles = [], []
         for ta in TAN_ALPHAS:
             rm = None
             for name, m in _models(Block.from_slenderness(10.0, ta), damped).items():
-                s = overturning_spectrum(m, w, a, progress=False)
+                s = overturning_spectrum(m, w, a, progress=False, sensitivity=True)
+                doubt[fig] += int(np.sum(s.uncertain))
                 s.save(out / f"fig{fig:02d}_{name.replace(' + ', '_').replace('ΔI', 'dI')}_tan{ta}.nc")
                 rm = s if rm is None else rm
                 spectra.append(s)
@@ -119,6 +120,7 @@ def fig06_09(out: Path, *, n: int = 32) -> list[Finding]:
         text = "; ".join(f"{name} tanα {ta}: {100 * disagree[fig, ta, name][0]:.1f} % cells, median |Δθ/α| "
                          f"{disagree[fig, ta, name][1]:.3f}" + (f", {disagree[fig, ta, name][2]} failed" if disagree[fig, ta, name][2] else "")
                          for ta in TAN_ALPHAS for name in ("SM", "SM + ΔI"))
+        text += f"; verdicts rounding could flip (jaxrock.sensitivity): {doubt[fig]} of {3 * len(TAN_ALPHAS) * n * n} cells"
         findings.append(Finding(
             f"{fig}", f"spectra ({'damped' if fig == 9 else 'undamped'}, {n}×{n}): RM, SM without and with added masses",
             "the three agree", text, "", f"each SM spectrum gives another overturning verdict than the RM's in ≤ "
@@ -157,11 +159,12 @@ def fig07(out: Path, *, quick: bool = False) -> list[Finding]:
 def fig10(out: Path, *, heights=(1, 2, 4, 8, 16), scales=np.linspace(0.5, 10, 20), refine: int = 8) -> list[Finding]:
     out = Path(out)
     record = el_centro()
-    results, labels, least = [], [], {}
+    results, labels, least, doubt = [], [], {}, 0
     for ta in TAN_ALPHAS:
         block = Block.from_slenderness(heights[0], ta)
         for name, m in (("RM", RigidModel(block)), ("SM", SpringModel(block))):
-            r = record_overturning_scale(m, record, heights, scales, refine=refine, progress=False)
+            r = record_overturning_scale(m, record, heights, scales, refine=refine, progress=False, sensitivity=True)
+            doubt += int(np.sum(r.uncertain))
             r.save(out / f"fig10_{name}_tan{ta}.nc")
             results.append(r)
             labels.append(f"{name}, tanα = {ta}")
@@ -172,6 +175,8 @@ def fig10(out: Path, *, heights=(1, 2, 4, 8, 16), scales=np.linspace(0.5, 10, 20
     med = {ta: float(np.median(rel[ta])) for ta in TAN_ALPHAS}
     ok = all(med[ta] <= 0.10 for ta in TAN_ALPHAS if ta < 0.3)
     text = "; ".join(f"tanα {ta}: median |SM/RM − 1| {100 * med[ta]:.1f} % (max {100 * np.max(rel[ta]):.0f} %)" for ta in TAN_ALPHAS)
+    text += (f"; least factors an uncertain run decided (a verdict rounding could flip, jaxrock.sensitivity): {doubt} of "
+             f"{2 * len(TAN_ALPHAS) * len(heights)}")
     return [Finding("10", f"least overturning El Centro factor, RM against SM (2h = {', '.join(f'{h:g}' for h in heights)} m)",
                     "agree for α < 0.3", text, "", "median relative difference over the heights ≤ 10 % for tanα = 0.1, 0.2",
                     judged(ok), "" if ok else "the factors differ by more than 10 %")]
