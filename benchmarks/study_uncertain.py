@@ -1,10 +1,10 @@
 """Brute force against the `uncertain` flag (issue 55): does the flag catch the runs whose verdict
 rounding can flip, and leave the others alone?
 
-    python benchmarks/study_uncertain.py [--records-per 40] [--pulses 240] [--quick] [--out FILE]
+    python benchmarks/study_uncertain.py [--records-per 100] [--pulses 240] [--quick] [--out FILE]
 
 Scenes (seeded, RM, one block per scene):
-- record runs: the five packaged records and bench_suite's six synthetic ones (12–90 s), 40 runs
+- record runs: the five packaged records and bench_suite's six synthetic ones (12–90 s), 100 runs
   each (`--records-per`): 2h ∈ [1, 6] m (log-uniform), tanα ∈ [0.1, 0.3], the record scaled to
   1–5× its uplift factor (g tanα / PGA);
 - pulse cells: `--pulses` random scenes of bench_throughput's mixed blocks (2h ∈ [2, 50] m,
@@ -109,7 +109,7 @@ def rates(flag, changed) -> tuple[float, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--records-per", type=int, default=40)
+    ap.add_argument("--records-per", type=int, default=100)
     ap.add_argument("--pulses", type=int, default=240)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", default=None)
