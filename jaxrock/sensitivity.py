@@ -24,9 +24,9 @@ perturbation, δ = `PERTURBATION` (1e-7) unless stated, can reach the margin to 
 
 `benchmarks/study_uncertain.py` holds the flag against brute force (each scene at 3 tolerances ×
 5 scale factors, ×(1 ± 1e-9) and ×(1 ± 1e-7) among them; results/study_uncertain.txt), which chose
-δ = 1e-7: the largest perturbation the study makes, and a tangent that is linear in it (the
-divergence saturates, and is sampled at loop-step ends) caught too few of the changing verdicts
-at δ = 1e-9.
+δ = 1e-7, the largest perturbation it makes: on 1,100 record runs the flag catches 35 of the 36
+whose verdict changes and flags 9.5 % of the others; at δ = 1e-9 it catches 24 (every one that
+flips at 1e-9: the tangent answers for the perturbation it is asked about).
 
 The stepper must be forward-mode differentiable (`AbstractStepper.checkpointed` False, or a diffrax
 integrator with `autodiff="forward"`); `simulate(..., sensitivity=True)` and `run_batch(...,
