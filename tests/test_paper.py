@@ -137,6 +137,7 @@ def test_every_reported_row_has_its_step_and_every_step_a_row():
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1500)  # the subprocess's own limit (`_jaxrock`): the whole quick run takes 5-10 minutes on 2 cores
 def test_reproduce_quick_covers_every_row_of_the_paper_table(tmp_path):
     """The whole quick run (run by .ci/run): every figure of the paper's table (`REPORTED`) has
     findings with verdicts, the report states what the paper reports, and shows every figure it wrote."""
