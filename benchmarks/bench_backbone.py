@@ -54,6 +54,7 @@ SHARP = (1e-6, 2e-6)  # bilinear reference and its extrapolation partner
 OWN_TOL = 1e-4  # the reference's own error estimate above which a scene counts as unsettled
 TSIT5 = SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5")
 GA7 = GeneralizedAlpha(rtol=1e-7, atol=1e-7)
+GRADIENT_BACKBONES = tuple((b, float(s)) for b, s in (x.split(":") for x in os.environ.get("GRADIENT_BACKBONES", "tanh:1e-4,bilinear:1e-5").split(",")))
 
 
 def out(line: str = "") -> None:
@@ -165,7 +166,7 @@ def gradients() -> None:
                                              rng.uniform(2, 8, n)))
     tsit5_fwd = SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", autodiff="forward")
     out(f"{'backbone':9s} {'θs/α':>6s} {'integrator':>18s}  d max θ/d ln a_p: median and max relative error")
-    for backbone, s in (("tanh", 1e-4), ("bilinear", 1e-5)):
+    for backbone, s in GRADIENT_BACKBONES:
         for name, integ in (("generalized-α 1e-6", GeneralizedAlpha(1e-6, 1e-6)), ("Tsit5 1e-10", tsit5_fwd)):
             def peak(a_r, h2, ta, wr):
                 blk = Block.from_slenderness(h2, ta)
@@ -179,7 +180,7 @@ def gradients() -> None:
             err = np.abs(d - fd) / np.maximum(np.abs(fd), 0.05)
             out(f"{backbone:9s} {s:6.0e} {name:>18s}  {np.median(err):.2e}  {err.max():.2e}")
     out(f"{'backbone':9s} {'θs/α':>6s} {'integrator':>18s}  ∂r_eq²/∂c̄ reverse mode, central differences (h = 1e-4)")
-    for backbone, s in (("tanh", 1e-4), ("bilinear", 1e-5)):
+    for backbone, s in GRADIENT_BACKBONES:
         for tol in (1e-10, 1e-12):
             integ = SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=200_000)
             fam = SpringFamily(backbone=backbone, smoothing=s)

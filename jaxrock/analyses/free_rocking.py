@@ -128,20 +128,9 @@ def free_cycle(
 
     root = optx.Newton(rtol=1e-12, atol=1e-12 / p)
     event = diffrax.Event(same_side_peak, root_finder=root, direction=False)
-    sol = integrator.solve(
-        mech,
-        _STILL,
-        y0,
-        0.0,
-        t1,
-        event=event,
-        saveat=diffrax.SaveAt(t1=True),
-        dtmax=jnp.inf,
-    )
-    y1 = sol.ys[-1]
+    t_peak, y1, result, event_mask = integrator.solve_through(mech, _STILL, y0, 0.0, t1, event, dtmax=jnp.inf)
     theta1 = y1[0]
-    t_peak = sol.ts[-1]
-    found = (sol.result == diffrax.RESULTS.event_occurred) & jnp.all(sol.event_mask)
+    found = (result == diffrax.RESULTS.event_occurred) & jnp.all(jnp.stack(event_mask))  # one condition
     e0 = mech.rigid_potential(theta0)
     e1 = mech.rigid_potential(theta1)
     r2 = jnp.where(found, e1 / e0, jnp.nan)

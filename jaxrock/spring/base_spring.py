@@ -54,6 +54,9 @@ class AbstractBackbone(eqx.Module):
     # the spring has (all but) yielded once |θ| > band·θs: the uplift rotation and the pre-yield
     # band whose crossing generalized-α resolves
     band: ClassVar[float]
+    # a kink (a jump of the stiffness) at |θ| = θs: the diffrax integrator then steps onto it
+    # (an event, the run restarted on the next branch, `moment_on_branch`), never over it
+    kinked: ClassVar[bool] = False
 
     def unit_moment(self, u):
         """m(u) = M/My at u = θ/θs."""
@@ -70,6 +73,11 @@ class AbstractBackbone(eqx.Module):
     def moment(self, theta, My, theta_s):
         return My * self.unit_moment(theta / theta_s)
 
+    def moment_on_branch(self, theta, My, theta_s, branch):
+        """A kinked backbone's moment continued smoothly from one branch (0: pre-yield, ±1: yielded
+        to ±My): the moment of a run between two kinks (`kinked`)."""
+        raise NotImplementedError
+
     def potential(self, theta, My, theta_s):
         return My * theta_s * self.unit_potential(theta / theta_s)
 
@@ -79,6 +87,10 @@ class Bilinear(AbstractBackbone):
 
     name: ClassVar[str] = "bilinear"
     band: ClassVar[float] = 1.0
+    kinked: ClassVar[bool] = True
+
+    def moment_on_branch(self, theta, My, theta_s, branch):
+        return My * jnp.where(branch == 0, theta / theta_s, branch)
 
     def unit_moment(self, u):
         return jnp.clip(u, -1.0, 1.0)

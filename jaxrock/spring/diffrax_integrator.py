@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import diffrax
 import equinox as eqx
+import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
 import optimistix as optx
@@ -124,6 +125,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
         t_next=None,
         max_steps: int | None = None,
         throw: bool = False,
+        checkpoints: int | None = None,
     ) -> diffrax.Solution:
         """One `diffrax.diffeqsolve` of the model's first-order equations from (t0, y0) to t1.
 
@@ -156,13 +158,70 @@ class SpringIntegrator(AbstractSpringIntegrator):
             stepsize_controller=FirstStepController(self.controller(system, excitation, dtmax, t0, max_steps), dt0, t_next),
             event=event,
             max_steps=max_steps,
-            adjoint=diffrax_adjoint(self.autodiff),
+            adjoint=diffrax_adjoint(self.autodiff, checkpoints),
             throw=throw,
         )
         # An interval that runs backwards (a history asked to end before the excitation starts; the
         # phases of a summary run forward by construction) is a failure, as diffrax's sign check
         # of (t1 - t0)·dt0 reported it before the first step travelled with the controller.
         return eqx.tree_at(lambda s: s.result, sol, diffrax.RESULTS.where(t1 < t0, diffrax.RESULTS.internal_error, sol.result))
+
+    def solve_through(self, system: SpringSystem, excitation: AbstractExcitation, y0, t0, t1, event: diffrax.Event,
+                      *, dtmax=None, max_pieces: int = 256):
+        """From (t0, y0) to `event` (or t1): (t, y, result, event_mask) at the end, as the last
+        `solve`'s `ts[-1]`, `ys[-1]`, `result` and `event_mask` (a tuple, one per condition). A kinked backbone
+        (`AbstractBackbone.kinked`) is run branch by branch: a solve ends on the kink (`kink_event`)
+        and the next starts there on the other branch, at most `max_pieces` solves (then
+        `max_steps_reached`) in a loop that reverse mode differentiates (equinox's checkpointed loop)."""
+        if not system.backbone.kinked:
+            sol = self.solve(system, excitation, y0, t0, t1, event=event, dtmax=dtmax)
+            return sol.ts[-1], sol.ys[-1], sol.result, tuple(jax.tree_util.tree_leaves(sol.event_mask))
+        fns, dirs = (event.cond_fn, event.direction) if isinstance(event.cond_fn, tuple) else ((event.cond_fn,), (event.direction,))
+        n_user = len(fns)
+        zero = jnp.zeros((), bool)
+
+        def body(c):
+            t, y, branch, _, _, mask, pieces = c
+            sol = self.solve(system.on_branch(branch), excitation, y, t, t1,
+                             event=diffrax.Event((*fns, kink_event(branch)), event.root_finder, direction=(*dirs, False)),
+                             dtmax=dtmax, checkpoints=self.max_steps)
+            hit = sol.result == diffrax.RESULTS.event_occurred
+            kink = hit & sol.event_mask[-1]
+            y1 = sol.ys[-1]
+            done = ~kink
+            result = diffrax.RESULTS.where(kink, diffrax.RESULTS.successful, sol.result)
+            mask = tuple(hit & m for m in sol.event_mask[:n_user])
+            return sol.ts[-1], y1, flip(branch, y1[0], kink), done, result, mask, pieces + 1
+
+        start = (jnp.asarray(t0, dtype=float), y0, system.branch_at(y0[0]), zero, diffrax.RESULTS.successful,
+                 (zero,) * n_user, jnp.zeros((), jnp.int32))
+        cond = lambda c: ~c[3]
+        t, y, _, done, result, mask, pieces = eqxi.while_loop(cond, body, start, max_steps=max_pieces,
+                                                              kind="checkpointed" if self.autodiff == "reverse" else "lax")
+        result = diffrax.RESULTS.where(done, result, diffrax.RESULTS.max_steps_reached)
+        return t, y, result, mask
+
+
+# The kink event fires KINK_HYSTERESIS·θs inside the next branch: a run restarted on the kink starts
+# that far from the next one (on whichever side round-off puts it), so it never fires again at once;
+# the branches meet continuously, so continuing one 1e-6 θs past the kink changes nothing measurable.
+KINK_HYSTERESIS = 1e-6
+
+
+def kink_event(branch):
+    """The condition of a kinked backbone's event (`diffrax.Event`, direction False): how far the
+    base rotation lies inside `branch`, plus the hysteresis; it falls through 0 past the kink."""
+
+    def cond(t, y, args, **kw):
+        system = args[0]
+        return system.kink_distance(y[0], branch) + KINK_HYSTERESIS * system.theta_s
+
+    return cond
+
+
+def flip(branch, theta, kink):
+    """The branch after a kink event at θ (pre-yield ↔ yielded to sign θ); unchanged without one."""
+    return jnp.where(kink, jnp.where(branch == 0, jnp.sign(theta), 0.0), branch)
 
 
 def first_step(system: SpringSystem, dtmax=None):
@@ -185,6 +244,8 @@ class _Carry(eqx.Module):
     rec: Record
     status: Status
     e_settle: Array  # free motion stops below this mechanical energy (`SpringSystem.settle_energy`)
+    branch: Array  # a kinked backbone's branch (`SpringSystem.branch_at`; 0 for a smooth one)
+    hist: dict | None  # a kinked history's values at the save times so far (NaN: not yet)
 
 
 class DiffraxSpringStepper(AbstractStepper):
@@ -205,13 +266,21 @@ class DiffraxSpringStepper(AbstractStepper):
     t1: Array | None
 
     @property
+    def kinked(self) -> bool:
+        return self.system.backbone.kinked
+
+    @property
     def max_steps(self) -> int:
-        # pieces: both phases' step bounds in pieces, and the phase switch
-        return 2 * (-(-self.integrator.max_steps // self.integrator.chunk_steps)) + 2
+        # pieces: both phases' step bounds in pieces, and the phase switch; a kinked backbone's
+        # pieces that end on a kink besides (each takes a step at least: the phases' step bound)
+        pieces = 2 * (-(-self.integrator.max_steps // self.integrator.chunk_steps)) + 2
+        return pieces + (2 * self.integrator.max_steps if self.kinked else 0)
 
     @property
     def checkpointed(self) -> bool:
-        return True
+        # a kinked backbone's pieces run in `solve`'s loop: checkpointed for reverse mode, a plain
+        # loop for forward mode (JAX runs neither mode through the other's loop)
+        return self.integrator.autodiff == "reverse" or not self.kinked
 
     @property
     def schedule(self) -> Schedule:
@@ -228,7 +297,9 @@ class DiffraxSpringStepper(AbstractStepper):
         return _Carry(phase=zero + _WINDOW, t=jnp.asarray(excitation.t_start, dtype=y0.dtype), y=y0,
                       t_next=jnp.asarray(jnp.inf, dtype=y0.dtype), steps=zero, n_steps=zero,
                       rec=Record.start(), status=Status.ok,
-                      e_settle=jnp.zeros((), y0.dtype))
+                      e_settle=jnp.zeros((), y0.dtype), branch=system.branch_at(y0[0]) if self.kinked else jnp.zeros((), y0.dtype),
+                      hist=None if self.save is None or not self.kinked else
+                      {f: jnp.full(self.save.ts.shape, jnp.nan, y0.dtype) for f in self.save.fields})
 
     def step(self, excitation, c: _Carry) -> _Carry:
         return self._piece(excitation, c, self.integrator.chunk_steps)
@@ -242,9 +313,12 @@ class DiffraxSpringStepper(AbstractStepper):
 
     def finish(self, excitation, c: _Carry) -> Solution:
         status = Status.where(c.phase == _FINISHED, c.status, Status.max_iterations)
-        return self.model.watch(self.system).solution(c.rec, status, n_iterations=c.n_steps)
+        ts = None if self.save is None else self.save.ts
+        return self.model.watch(self.system).solution(c.rec, status, n_iterations=c.n_steps, ts=ts, history=c.hist)
 
     def solve(self, excitation) -> Solution:
+        if self.kinked:  # pieces between kinks, in equinox's checkpointed loop
+            return super().solve(excitation)
         if self.save is not None:
             return self._history(excitation)
         c = self.init(excitation)
@@ -258,7 +332,8 @@ class DiffraxSpringStepper(AbstractStepper):
         watch = model.watch(system)
         N = system.ndof
         free, running = c.phase == _FREE, c.phase != _FINISHED
-        t_stop = model.run_end(system, excitation, None, self.t1)
+        summary = self.save is None
+        t_stop = model.run_end(system, excitation, self.save, self.t1)
         t_end = jnp.where(free, t_stop, excitation.t_end)
         # a finished run still traces its piece (under vmap every lane does), over a vanishing interval
         t_end = jnp.where(running, jnp.maximum(t_end, c.t), c.t + 1e-9)
@@ -266,41 +341,67 @@ class DiffraxSpringStepper(AbstractStepper):
         dtmax = jnp.where(free, jnp.inf, excitation.max_step)
 
         def settled(t, y, args, **kw):
-            return free & (args[0].mechanical_energy(y) < e_settle)
+            return free & summary & (args[0].mechanical_energy(y) < e_settle)
 
+        conditions, directions = (settled,), (None,)
+        if self.kinked:
+            conditions, directions = (settled, kink_event(c.branch)), (None, False)
+        steps_saved = diffrax.SubSaveAt(steps=True, t0=True)
+        if c.hist is None:
+            saveat = diffrax.SaveAt(subs=[steps_saved], controller_state=True)
+        else:
+            # the save times this piece reaches (those before the start clipped to it: the first
+            # piece's start is the run's initial state)
+            fields = self.save.fields
+            saved = diffrax.SubSaveAt(ts=jnp.clip(self.save.ts, c.t, t_end), fn=lambda t, y, args: args[0].history(t, y, args[1], fields))
+            saveat = diffrax.SaveAt(subs=[steps_saved, saved], controller_state=True)
         sol = integ.solve(
-            system, excitation, c.y, c.t, t_end,
-            event=self._events(watch, settled),
-            saveat=diffrax.SaveAt(steps=True, t0=True, controller_state=True),
+            system.on_branch(c.branch) if self.kinked else system, excitation, c.y, c.t, t_end,
+            event=self._events(watch, conditions, directions),
+            saveat=saveat,
             dtmax=dtmax,
             t_next=c.t_next,
             max_steps=max_steps,
+            # a piece inside the checkpointed loop of `solve` stores every step in reverse mode (as
+            # the RM's windows: a solve recomputed inside the loop's own backward pass otherwise
+            # returned wrong cotangents)
+            checkpoints=max_steps if self.kinked else None,
         )
+        sol_ts, sol_ys = sol.ts[0], sol.ys[0]
         # The piece's last state is its last accepted step, or the event it ended on (`num_accepted_steps`
         # entries after the start). diffrax appends its final value to the saved steps, and under vmap,
         # where another lane's event makes every lane locate one, a lane without an event gets the
         # end of its last *attempted* step there: a rejected one's, for a lane cut off by max_steps.
         n_acc = sol.stats["num_accepted_steps"]
-        valid = jnp.arange(sol.ts.shape[0]) <= n_acc
-        ts = jnp.where(valid, sol.ts, jnp.inf)
-        t_last, y_last = sol.ts[n_acc], sol.ys[n_acc]
-        th, om = jnp.where(valid, sol.ys[:, 0], jnp.inf), jnp.where(valid, sol.ys[:, N], jnp.inf)
+        valid = jnp.arange(sol_ts.shape[0]) <= n_acc
+        ts = jnp.where(valid, sol_ts, jnp.inf)
+        t_last, y_last = sol_ts[n_acc], sol_ys[n_acc]
+        th, om = jnp.where(valid, sol_ys[:, 0], jnp.inf), jnp.where(valid, sol_ys[:, N], jnp.inf)
         event = sol.result == diffrax.RESULTS.event_occurred
+        kink = (event & sol.event_mask[-1]) if self.kinked else jnp.zeros((), bool)
+        event = event & ~kink  # an event that ends the phase
         cut = sol.result == diffrax.RESULTS.max_steps_reached
         steps = c.steps + sol.stats["num_steps"]
         # an event that ended the piece located the overturning (or the rest); its time is the last step end
         over = event & sol.event_mask[0]
         rec = c.rec.merge(watch.steps(ts, th, om).overturn_located(over, t_last))
         status = diffrax_status(sol.result)
-        go_on = cut & (steps < integ.max_steps)  # a piece cut off by its own bound, not the phase's
-        status = Status.where(go_on, Status.ok, status)
+        # a piece cut off by its own bound, not the phase's, or ended on a kink
+        go_on = (cut & (steps < integ.max_steps)) | (kink & (steps < integ.max_steps))
+        status = Status.where(go_on, Status.ok, Status.where(kink, Status.max_steps, status))
         ended = event | (status != Status.ok) | free  # the window ends in the free motion's phase
         phase = jnp.where(go_on, c.phase, jnp.where(ended, _FINISHED, _FREE))
         switch = (phase == _FREE) & ~free
         phase = jnp.where(running, phase, c.phase)
         keep = lambda new, old: jnp.where(running, new, old)
         y = jnp.where(jnp.all(jnp.isfinite(y_last)), y_last, c.y)
-        t_next = jnp.where(switch, jnp.inf, FirstStepController.next_time(sol.controller_state))
+        # after a kink a fresh first step: the other branch's time scale is not this one's
+        t_next = jnp.where(switch | kink, jnp.inf, FirstStepController.next_time(sol.controller_state))
+        hist = c.hist
+        if hist is not None:
+            first = (c.n_steps == 0) & (c.phase == _WINDOW)
+            take = running & (self.save.ts <= t_last) & ((self.save.ts > c.t) | first)
+            hist = {f: jnp.where(take, sol.ys[1][f], hist[f]) for f in hist}
         return _Carry(
             phase=phase,
             t=keep(t_last, c.t),
@@ -312,16 +413,19 @@ class DiffraxSpringStepper(AbstractStepper):
             status=Status.where(running, status, c.status),
             # the peak of the window is the free motion's: computed once
             e_settle=jnp.where(switch, system.settle_energy(rec.peak), c.e_settle),
+            branch=keep(flip(c.branch, y[0], kink), c.branch),
+            hist=hist,
         )
 
-    def _events(self, watch, *more) -> diffrax.Event:
-        """Overturning, |θ| reaching `watch.overturn` (never for a fixed base), first, then `more`;
-        located by Newton on the step's interpolant."""
+    def _events(self, watch, more=(), directions=()) -> diffrax.Event:
+        """Overturning, |θ| reaching `watch.overturn` (never for a fixed base), first, then `more`
+        (with their `directions`); located by Newton on the step's interpolant."""
 
         def over_fn(t, y, args, **kw):
             return watch.overturn - jnp.abs(y[0])
 
-        return diffrax.Event((over_fn, *more), root_finder=SafeNewton(rtol=1e-10, atol=1e-12 * self.model.block.alpha_r))
+        return diffrax.Event((over_fn, *more), root_finder=SafeNewton(rtol=1e-10, atol=1e-12 * self.model.block.alpha_r),
+                             direction=(None, *directions) if more else None)
 
     def _history(self, excitation) -> Solution:
         """A history: one solve to the run's end, saved at `save.ts`."""

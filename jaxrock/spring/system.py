@@ -76,6 +76,8 @@ class SpringSystem(eqx.Module):
     V_eq: Array | None
     r: Array | None  # ground load vector p (`beam.ground_load`): f_ext = −üg p
     deform_scale: Array | float = 1.0  # fixed base: tolerance scales × (static drift / 2h α′)
+    # a kinked backbone's branch the run is on (`AbstractBackbone.kinked`; None: the whole backbone)
+    branch: Array | None = None
 
     @property
     def ndof(self) -> int:
@@ -106,7 +108,22 @@ class SpringSystem(eqx.Module):
         return self.backbone.potential(theta, self.My, self.theta_s)
 
     def spring_moment(self, theta):
+        if self.branch is not None:
+            return self.backbone.moment_on_branch(theta, self.My, self.theta_s, self.branch)
         return self.backbone.moment(theta, self.My, self.theta_s)
+
+    # -- a kinked backbone's branches (`AbstractBackbone.kinked`) --------------------------------
+    def branch_at(self, theta):
+        """The branch of a kinked backbone at θ: 0 pre-yield (|θ| ≤ θs), else sign θ."""
+        return jnp.where(jnp.abs(theta) <= self.theta_s, 0.0, jnp.sign(theta))
+
+    def on_branch(self, branch) -> "SpringSystem":
+        """This system with its spring continued from `branch` (`moment_on_branch`)."""
+        return eqx.tree_at(lambda s: s.branch, self, jnp.asarray(branch, self.theta_s.dtype), is_leaf=lambda x: x is None)
+
+    def kink_distance(self, theta, branch):
+        """How far θ lies inside `branch` (0: |θ| < θs; ±1: ±θ > θs) [rad]: it falls through 0 at the kink."""
+        return jnp.where(branch == 0, self.theta_s - jnp.abs(theta), branch * theta - self.theta_s)
 
     def _column_potential(self, q):
         """Gravity (+ strain) potential of the column, spring excluded."""
