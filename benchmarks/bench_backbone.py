@@ -1,4 +1,4 @@
-"""The spring's backbone and its pre-yield rotation θs, chosen by a study over many scenes (issue 20).
+"""The spring's backbone and its pre-yield rotation θs, chosen by a study over many scenes (issues 20, 56).
 
     python benchmarks/bench_backbone.py [--quick] [--n-rigid 192] [--n-flex 48] [--seed 0]
     python benchmarks/bench_backbone.py --part gradients
@@ -7,25 +7,27 @@
 Scenes (seeded uniform sample, both pulse kinds in equal numbers): tanα ∈ [0.05, 0.35],
 2h ∈ [1, 50] m (log-uniform), ω_p/p′ ∈ [1, 15] (log-uniform), a_p/(g tanα) ∈ [1, 8]; the
 quasi-rigid one-DOF SM, and flexible concrete columns (E = 30 GPa, 10 elements, ζ = 0.01); added
-masses, c̄ of eq. 17.
+masses, c̄ of eq. 17. Then new scenes from seed + 1: pulses as above and El Centro 1940 NS scaled
+to PGA/(g tanα) ∈ [1, 4] (56 + 24 quasi-rigid, 16 + 8 flexible).
 
 For each backbone (bilinear, tanh) and θs/α ∈ {1e-3 … 3e-6}:
 - error: |max|θ|/α − the sharp limit| (overturned = 1), the sharp limit being the bilinear backbone
   at θy = 1e-6 α (its own distance to the limit estimated by first-order extrapolation,
   |f(1e-6) − f(2e-6)|, and printed); runs at tight tolerances so that the backbone error is what
-  is measured (quasi-rigid: Tsit5 1e-10, the default, ~1e-8; flexible: generalized-α 1e-7);
+  is measured (quasi-rigid: Tsit5 1e-10, the default, ~1e-8, stopping on the bilinear kinks;
+  flexible: generalized-α 1e-7);
 - verdict changes: scenes that overturn in one and not in the other (their error is the jump to
   1, listed apart, with the scene);
 - cost: ms per scene of the model's default integrator on the whole vmapped batch (compaction as
   in the spectra), best of two warm calls; for flexible columns also the default integrator's
   total error (backbone + time steps).
 
-`--part gradients`: why the bilinear backbone is not the default — derivatives through its kink.
-On 8 seeded quasi-rigid rocking scenes (a_p/(g tanα) 1.2–3, 2h 5–30 m, tanα 0.12–0.3, ω_p/p 2–8),
-d max|θ|/α / d ln a_p by forward mode (generalized-α 1e-6 `jacfwd`; Tsit5 1e-10 forward) against
-central differences (step 1e-3 in ln a_p), and calibration's reverse-mode ∂r_eq²/∂c̄ (Tsit5 1e-10
-and 1e-12; tanα = 0.2, c̄ = 0.08, θ₀ = 0.7 α) against central differences, for tanh at θs = 1e-4 α
-and the bilinear backbone at θy = 1e-5 α.
+`--part gradients`: the defaults' derivatives. On 16 seeded scenes per model (a_p/(g tanα) 1.2–6,
+2h 5–30 m, tanα 0.12–0.3, ω_p/p 2–8), d max|θ|/α, d t_uplift and d t_overturn / d ln a_p in both
+autodiff modes against central differences (h = 1e-4 in ln a_p): quasi-rigid with Tsit5 1e-10 (the
+default) and generalized-α 1e-6 (forward), flexible with Kvaerno5 1e-8 and generalized-α 1e-6; and
+calibration's reverse-mode ∂r_eq²/∂c̄ (Tsit5 1e-10 and 1e-12; tanα = 0.2, c̄ = 0.08, θ₀ = 0.7 α)
+for tanh at θs = 1e-4 α and the bilinear backbone at θy = 1e-5 α.
 
 The printed tables are also written to benchmarks/results/bench_backbone.txt (and
 bench_backbone_gradients.txt).
@@ -62,27 +64,41 @@ def out(line: str = "") -> None:
     LINES.append(line)
 
 
-def sample(n, rng):
-    """(2h, tanα, ω_p/p, a_p/(g tanα), antisymmetric) for n scenes."""
-    return dict(
-        height=np.exp(rng.uniform(math.log(1.0), math.log(50.0), n)),
-        tan_alpha=rng.uniform(0.05, 0.35, n),
-        wr=np.exp(rng.uniform(0.0, math.log(15.0), n)),
-        ar=rng.uniform(1.0, 8.0, n),
-        anti=np.arange(n) % 2 == 1,
+def sample(n, rng, n_records=0):
+    """(2h, tanα, ω_p/p, a_p/(g tanα), kind) for n pulse scenes, symmetric and antisymmetric in
+    turn, then `n_records` El Centro scenes (the record scaled to PGA/(g tanα) = `ar` ∈ [1, 4])."""
+    m = n + n_records
+    scenes = dict(
+        height=np.exp(rng.uniform(math.log(1.0), math.log(50.0), m)),
+        tan_alpha=rng.uniform(0.05, 0.35, m),
+        wr=np.exp(rng.uniform(0.0, math.log(15.0), m)),
+        ar=rng.uniform(1.0, 8.0, m),
+        kind=np.where(np.arange(m) % 2 == 1, "anti", "sym").astype(object),
     )
+    scenes["kind"][n:] = "record"
+    scenes["ar"][n:] = rng.uniform(1.0, 4.0, n_records)
+    return scenes
 
 
-def batch(scenes, idx, flexible, backbone, smoothing):
-    """Stacked models and pulses of the scenes `idx` (one pulse kind)."""
-    def one(h2, ta, wr, ar):
+def excitations(kind, blk, ar, wr):
+    """The stacked excitations of one kind of scene (`blk`: the stacked blocks)."""
+    if kind == "record":
+        rec = jr.el_centro()
+        return jax.vmap(rec.scaled)(ar * jr.G * blk.tan_alpha / float(jnp.max(jnp.abs(rec.acc))))
+    a_p, w_p = jax.vmap(jr.pulse_of_ratios)(blk, ar, wr)
+    return (AntisymmetricRickerPulse if kind == "anti" else RickerPulse)(a_p, w_p)
+
+
+def batch(scenes, idx, flexible, backbone, smoothing, kind):
+    """Stacked models and excitations of the scenes `idx` (all of one `kind`)."""
+    def one(h2, ta):
         blk = Block.from_slenderness(h2, ta)
         col = Column.concrete() if flexible else None
-        model = SpringModel(blk, col, backbone=backbone, smoothing=smoothing)
-        return model, jr.pulse_of_ratios(blk, ar, wr)
+        return SpringModel(blk, col, backbone=backbone, smoothing=smoothing)
 
     arr = lambda k: jnp.asarray(scenes[k][idx])
-    return jax.vmap(one)(arr("height"), arr("tan_alpha"), arr("wr"), arr("ar"))
+    models = jax.vmap(one)(arr("height"), arr("tan_alpha"))
+    return models, excitations(kind, models.block, arr("ar"), arr("wr"))
 
 
 def run(scenes, flexible, backbone, smoothing, integrator, timed=False):
@@ -90,11 +106,12 @@ def run(scenes, flexible, backbone, smoothing, integrator, timed=False):
     theta = np.full(scenes["ar"].size, np.nan)
     status = np.zeros(scenes["ar"].size, int)
     per_scene = 0.0
-    for anti in (False, True):
-        idx = np.flatnonzero(scenes["anti"] == anti)
-        models, (a_p, w_p) = batch(scenes, idx, flexible, backbone, smoothing)
-        pulses = (AntisymmetricRickerPulse if anti else RickerPulse)(a_p, w_p)
-        go = lambda: jax.block_until_ready(jr.run_batch(models, pulses, integrator, model_batched=True))
+    for kind in ("sym", "anti", "record"):
+        idx = np.flatnonzero(scenes["kind"] == kind)
+        if idx.size == 0:
+            continue
+        models, exc = batch(scenes, idx, flexible, backbone, smoothing, kind)
+        go = lambda: jax.block_until_ready(jr.run_batch(models, exc, integrator, model_batched=True))
         sol = go()
         if timed:
             best = math.inf
@@ -109,13 +126,16 @@ def run(scenes, flexible, backbone, smoothing, integrator, timed=False):
 
 
 def describe(scenes, i):
+    if scenes["kind"][i] == "record":
+        return f"2h {scenes['height'][i]:.1f} m, tanα {scenes['tan_alpha'][i]:.3f}, El Centro at PGA/(g tanα) {scenes['ar'][i]:.2f}"
     return (f"2h {scenes['height'][i]:.1f} m, tanα {scenes['tan_alpha'][i]:.3f}, ω_p/p {scenes['wr'][i]:.2f}, "
-            f"a_p/(g tanα) {scenes['ar'][i]:.2f}, {'anti' if scenes['anti'][i] else 'sym'}")
+            f"a_p/(g tanα) {scenes['ar'][i]:.2f}, {scenes['kind'][i]}")
 
 
 def study(name, scenes, flexible, error_integrator, default_integrator):
     n = scenes["ar"].size
-    out(f"\n## {name}: {n} scenes ({int(scenes['anti'].sum())} antisymmetric pulses)")
+    out(f"\n## {name}: {n} scenes ({int(np.sum(scenes['kind'] == 'anti'))} antisymmetric pulses, "
+        f"{int(np.sum(scenes['kind'] == 'record'))} records)")
     t = time.perf_counter()
     ref, ref_st, _ = run(scenes, flexible, "bilinear", SHARP[0], error_integrator)
     ref2, _, _ = run(scenes, flexible, "bilinear", SHARP[1], error_integrator)
@@ -156,30 +176,57 @@ def study(name, scenes, flexible, error_integrator, default_integrator):
     return rows
 
 
+def _relative(d, fd, floor):
+    """|d − fd| / max(|fd|, floor) where both are finite."""
+    ok = np.isfinite(d) & np.isfinite(fd)
+    return np.where(ok, np.abs(d - fd) / np.maximum(np.abs(fd), floor), np.nan), ok
+
+
 def gradients() -> None:
+    """Derivatives of the defaults against central differences (issue 56, item 3)."""
     from jaxrock.analyses.free_rocking import SpringFamily, energy_ratio
 
-    out("# bench_backbone --part gradients: derivatives through the backbone, against central differences")
+    out("# bench_backbone --part gradients: derivatives against central differences (h = 1e-4 in ln a_p)")
+    out(f"# defaults: backbone {jr.DEFAULT_BACKBONE} (by model), θs/α {jr.DEFAULT_SMOOTHING} (by backbone)")
     rng = np.random.default_rng(11)
-    n = 8
-    scenes = tuple(jnp.asarray(x) for x in (rng.uniform(1.2, 3.0, n), rng.uniform(5, 30, n), rng.uniform(0.12, 0.3, n),
+    n = 16
+    # a_p/(g tanα), 2h, tanα, ω_p/p: rocking scenes, a third or so overturning
+    scenes = tuple(jnp.asarray(x) for x in (rng.uniform(1.2, 6.0, n), rng.uniform(5, 30, n), rng.uniform(0.12, 0.3, n),
                                              rng.uniform(2, 8, n)))
-    tsit5_fwd = SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", autodiff="forward")
-    out(f"{'backbone':9s} {'θs/α':>6s} {'integrator':>18s}  d max θ/d ln a_p: median and max relative error")
-    for backbone, s in GRADIENT_BACKBONES:
-        for name, integ in (("generalized-α 1e-6", GeneralizedAlpha(1e-6, 1e-6)), ("Tsit5 1e-10", tsit5_fwd)):
-            def peak(a_r, h2, ta, wr):
-                blk = Block.from_slenderness(h2, ta)
-                ex = RickerPulse(*jr.pulse_of_ratios(blk, a_r, wr))
-                return jr.simulate(SpringModel(blk, backbone=backbone, smoothing=s), ex, integrator=integ).max_theta
+    h = 1e-4
+    outputs = ("max_theta", "t_uplift", "t_overturn")
+    floors = {"max_theta": 0.05, "t_uplift": 0.01, "t_overturn": 0.01}  # the scale below which an error is absolute
+    out(f"{'model':12s} {'integrator':>24s} {'mode':>8s}  " + "  ".join(f"{o + ' median/max (n)':>28s}" for o in outputs) + "  s")
+    for name, column, integrators in (
+        ("quasi-rigid", None, (("Tsit5 1e-10 (default)", lambda a: SpringIntegrator(1e-10, 1e-10, "tsit5", max_steps=200_000, autodiff=a)),
+                               ("generalized-α 1e-6", lambda a: GeneralizedAlpha(1e-6, 1e-6)))),
+        ("flexible", Column.concrete(), (("Kvaerno5 1e-8", lambda a: SpringIntegrator(1e-8, 1e-8, "kvaerno5", max_steps=200_000, autodiff=a)),
+                                         ("generalized-α 1e-6", lambda a: GeneralizedAlpha(1e-6, 1e-6)))),
+    ):
+        for iname, make in integrators:
+            for mode in ("forward", "reverse"):
+                if mode == "reverse" and "generalized" in iname:
+                    continue  # forward mode only
+                integ = make(mode)
+                t = time.perf_counter()
 
-            d = np.asarray(jax.vmap(jax.jacfwd(peak))(*scenes)) * np.asarray(scenes[0])
-            h = 1e-3
-            f = jax.vmap(peak)
-            fd = (np.asarray(f(scenes[0] * math.exp(h), *scenes[1:])) - np.asarray(f(scenes[0] * math.exp(-h), *scenes[1:]))) / (2 * h)
-            err = np.abs(d - fd) / np.maximum(np.abs(fd), 0.05)
-            out(f"{backbone:9s} {s:6.0e} {name:>18s}  {np.median(err):.2e}  {err.max():.2e}")
-    out(f"{'backbone':9s} {'θs/α':>6s} {'integrator':>18s}  ∂r_eq²/∂c̄ reverse mode, central differences (h = 1e-4)")
+                def run(log_ar, h2, ta, wr):
+                    blk = Block.from_slenderness(h2, ta)
+                    ex = RickerPulse(*jr.pulse_of_ratios(blk, jnp.exp(log_ar), wr))
+                    s = jr.simulate(SpringModel(blk, column), ex, integrator=integ)
+                    return jnp.stack([s.max_theta, s.t_uplift, s.t_overturn])
+
+                x = jnp.log(scenes[0])
+                f = jax.jit(jax.vmap(run))
+                derivative = jax.jacfwd(run) if mode == "forward" else jax.jacrev(run)
+                d = np.asarray(jax.jit(jax.vmap(derivative))(x, *scenes[1:]))
+                fd = (np.asarray(f(x + h, *scenes[1:])) - np.asarray(f(x - h, *scenes[1:]))) / (2 * h)
+                cells = []
+                for k, o in enumerate(outputs):
+                    err, ok = _relative(d[:, k], fd[:, k], floors[o])
+                    cells.append(f"{np.nanmedian(err):.1e}/{np.nanmax(err):.1e} ({int(ok.sum())})" if ok.any() else "—")
+                out(f"{name:12s} {iname:>24s} {mode:>8s}  " + "  ".join(f"{c:>28s}" for c in cells) + f"  {time.perf_counter() - t:.0f}")
+    out(f"\n{'backbone':9s} {'θs/α':>6s} {'integrator':>18s}  ∂r_eq²/∂c̄ reverse mode, central differences (h = 1e-4): tanα 0.2, c̄ 0.08, θ₀ = 0.7 α")
     for backbone, s in GRADIENT_BACKBONES:
         for tol in (1e-10, 1e-12):
             integ = SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=200_000)
@@ -187,7 +234,7 @@ def gradients() -> None:
             r2 = lambda c: energy_ratio(fam(0.2, c), 0.7, integrator=integ)
             g = float(jax.jit(jax.grad(r2))(0.08))
             fd = float((jax.jit(r2)(0.08 + 1e-4) - jax.jit(r2)(0.08 - 1e-4)) / 2e-4)
-            out(f"{backbone:9s} {s:6.0e} {'Tsit5 ' + format(tol, 'g'):>18s}  {g:.4f}  {fd:.4f}")
+            out(f"{backbone:9s} {s:6.0e} {'Tsit5 ' + format(tol, 'g'):>18s}  {g:.8f}  {fd:.8f}  relative {abs(g - fd) / abs(fd):.1e}")
 
 
 def main() -> None:
@@ -196,6 +243,10 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="a few scenes (smoke run)")
     ap.add_argument("--n-rigid", type=int, default=192, help="quasi-rigid scenes")
     ap.add_argument("--n-flex", type=int, default=48, help="flexible scenes")
+    ap.add_argument("--n-rigid-new", type=int, default=56, help="new quasi-rigid pulse scenes (seed + 1)")
+    ap.add_argument("--n-records", type=int, default=24, help="new quasi-rigid El Centro scenes")
+    ap.add_argument("--n-flex-new", type=int, default=16, help="new flexible pulse scenes")
+    ap.add_argument("--n-records-flex", type=int, default=8, help="new flexible El Centro scenes")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
     if args.part == "gradients":
@@ -203,7 +254,7 @@ def main() -> None:
         (HERE / "results" / "bench_backbone_gradients.txt").write_text("\n".join(LINES) + "\n")
         return
     if args.quick:
-        args.n_rigid, args.n_flex = 8, 4
+        args.n_rigid, args.n_flex, args.n_rigid_new, args.n_records, args.n_flex_new, args.n_records_flex = 8, 4, 4, 2, 2, 2
     rng = np.random.default_rng(args.seed)
     t0 = time.perf_counter()
     out("# bench_backbone: error of the spring backbone against the sharp (rigid-plastic) limit, and cost")
@@ -211,11 +262,17 @@ def main() -> None:
         f"{os.cpu_count()} cores, jax {jax.__version__}; seed {args.seed}")
     rigid = sample(args.n_rigid, rng)
     flex = sample(args.n_flex, rng)
+    # new seeded scenes (issue 56): pulses and El Centro records
+    rng_new = np.random.default_rng(args.seed + 1)
+    rigid_new = sample(args.n_rigid_new, rng_new, args.n_records)
+    flex_new = sample(args.n_flex_new, rng_new, args.n_records_flex)
     qr = SpringModel(Block.from_slenderness(10.0, 0.2))
     fl = SpringModel(Block.from_slenderness(10.0, 0.2), Column.concrete())
     study("quasi-rigid one-DOF SM (errors and cost: Tsit5 1e-10, the default)", rigid, False, TSIT5, qr.default_integrator())
-    study("flexible concrete column, 10 elements (errors: generalized-α 1e-7; cost: the default generalized-α 1e-5)",
-          flex, True, GA7, fl.default_integrator())
+    flex_title = "flexible concrete column, 10 elements (errors: generalized-α 1e-7; cost: the default Checked generalized-α 1e-5)"
+    study("quasi-rigid one-DOF SM, new scenes (seed + 1) with El Centro records", rigid_new, False, TSIT5, qr.default_integrator())
+    study(flex_title, flex, True, GA7, fl.default_integrator())
+    study(flex_title.replace(" (", ", new scenes (seed + 1) with El Centro records (", 1), flex_new, True, GA7, fl.default_integrator())
     out(f"\ntotal {time.perf_counter() - t0:.0f} s")
     if not args.quick:
         res = HERE / "results"
