@@ -8,9 +8,11 @@ paper's missing eq. 13, `rm_target`).
 - `energy_ratio(model, θ₀/α)`: the SM's per-cycle ratio ``r_eq² = E(θ₁)/E(θ₀)`` of free rocking
   (θ̇(0) = 0, still ground) from θ₀ to the next peak θ₁ *on the same side* (θ₀ → opposite peak →
   θ₁). ``E`` is the model's own potential at zero velocity, `SpringModel.static_potential`
-  (``My θs log cosh(θ/θs) − m g h (1 − cosθ)``, → SPEC's ``m g R (sinα|θ| − cosα(1 − cosθ))`` as
-  θs → 0; at the default θs = 10⁻⁴α′ (`DEFAULT_SMOOTHING`) the two ratios differ by < 5·10⁻⁴, and only the model's own
-  energy gives exactly r_eq² = 1 without damping).
+  (the spring's potential − m g h (1 − cosθ), e.g. ``My θs log cosh(θ/θs)`` for tanh, → SPEC's
+  ``m g R (sinα|θ| − cosα(1 − cosθ))`` as θs → 0; at θs ≤ 10⁻⁴α′ the two ratios differ by
+  < 5·10⁻⁴, and only the model's own energy gives exactly r_eq² = 1 without damping). On the
+  bilinear backbone (the quasi-rigid default) the solve stops on its kinks
+  (`SpringIntegrator.solve_through`), so ∂r_eq²/∂c̄ is the motion's.
   The peak is located exactly: a `diffrax.Event` on the base velocity, ``s θ̇`` crossing zero
   downwards (s = sign θ₀), gated to the same side (``s θ > 0``) and to times after half the rigid
   model's quarter period (so that the start, where θ̇ = 0, and the column's vibration there cannot
