@@ -7,7 +7,12 @@ control with a component-scaled absolute tolerance (`SpringSystem.atol_scale`); 
 A summary runs in two phases: the excitation window, then free motion until the answer is fixed —
 the mechanical energy below the potential at the largest rotation seen so far
 (`SpringSystem.settled`, an event), overturned, or the run's end (`SpringModel.run_end`); in a batch,
-each phase in pieces of a bounded number of steps (`DiffraxSpringStepper`)."""
+each phase in pieces of a bounded number of steps (`DiffraxSpringStepper`).
+
+A kinked backbone (the bilinear, `AbstractBackbone.kinked`) is integrated branch by branch: a solve
+ends where |θ| crosses the yield rotation (`kink_event`) and the next starts there on the other
+branch (`SpringSystem.on_branch`), so that no step straddles the kink and the derivatives of the
+discrete run are those of the motion (`benchmarks/bench_backbone.py --part gradients`)."""
 
 from __future__ import annotations
 
@@ -181,7 +186,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
         zero = jnp.zeros((), bool)
 
         def body(c):
-            t, y, branch, _, _, mask, pieces = c
+            t, y, branch, _, _, mask = c
             sol = self.solve(system.on_branch(branch), excitation, y, t, t1,
                              event=diffrax.Event((*fns, kink_event(branch)), event.root_finder, direction=(*dirs, False)),
                              dtmax=dtmax, checkpoints=self.max_steps)
@@ -191,12 +196,12 @@ class SpringIntegrator(AbstractSpringIntegrator):
             done = ~kink
             result = diffrax.RESULTS.where(kink, diffrax.RESULTS.successful, sol.result)
             mask = tuple(hit & m for m in sol.event_mask[:n_user])
-            return sol.ts[-1], y1, flip(branch, y1[0], kink), done, result, mask, pieces + 1
+            return sol.ts[-1], y1, flip(branch, y1[0], kink), done, result, mask
 
         start = (jnp.asarray(t0, dtype=float), y0, system.branch_at(y0[0]), zero, diffrax.RESULTS.successful,
-                 (zero,) * n_user, jnp.zeros((), jnp.int32))
+                 (zero,) * n_user)
         cond = lambda c: ~c[3]
-        t, y, _, done, result, mask, pieces = eqxi.while_loop(cond, body, start, max_steps=max_pieces,
+        t, y, _, done, result, mask = eqxi.while_loop(cond, body, start, max_steps=max_pieces,
                                                               kind="checkpointed" if self.autodiff == "reverse" else "lax")
         result = diffrax.RESULTS.where(done, result, diffrax.RESULTS.max_steps_reached)
         return t, y, result, mask
