@@ -202,7 +202,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
                  (zero,) * n_user)
         cond = lambda c: ~c[3]
         t, y, _, done, result, mask = eqxi.while_loop(cond, body, start, max_steps=max_pieces,
-                                                              kind="checkpointed" if self.autodiff == "reverse" else "lax")
+                                                      kind="checkpointed" if self.autodiff == "reverse" else "lax")
         result = diffrax.RESULTS.where(done, result, diffrax.RESULTS.max_steps_reached)
         return t, y, result, mask
 
@@ -396,7 +396,7 @@ class DiffraxSpringStepper(AbstractStepper):
         rec = c.rec.merge(watch.steps(ts, th, om).overturn_located(over, t_last))
         status = diffrax_status(sol.result)
         # a piece cut off by its own bound, not the phase's, or ended on a kink
-        go_on = (cut & (steps < integ.max_steps)) | (kink & (steps < integ.max_steps))
+        go_on = (cut | kink) & (steps < integ.max_steps)
         status = Status.where(go_on, Status.ok, Status.where(kink, Status.max_steps, status))
         ended = event | (status != Status.ok) | free  # the window ends in the free motion's phase
         phase = jnp.where(go_on, c.phase, jnp.where(ended, _FINISHED, _FREE))
