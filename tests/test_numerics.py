@@ -75,6 +75,7 @@ def test_stability_refuses_an_unwritable_out(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1200)  # cold on 2 cores the panels take ~600 s (rm-scene 53, rm-grid 156, sm-scene 47, sm-grid 142, flex-scene 62 s, ...: a compile per solver and tolerance); 272 s with the kernel cache warm
 def test_work_precision_quick(tmp_path):
     """The quick diagrams through the command: every panel's default is a measured point of its
     series (the star lies on a curve) with a finite error within its model's stated accuracy (RM

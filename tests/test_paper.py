@@ -80,6 +80,7 @@ def test_a_finding_that_differs_carries_its_reason():
     assert value_finding("x", "q", 100.0, 111.0, rtol=0.1).verdict == NOT_REPRODUCED
 
 
+@pytest.mark.timeout(1500)  # the subprocess's own limit (`_jaxrock`): 245 s cold alone on 2 cores (fig13 99 s, fig17 107 s), past pytest-timeout's 300 s beside another worker
 def test_reproduce_quick_subset_answers_both_open_questions_and_resumes(tmp_path):
     """`jaxrock reproduce --quick --only fig03,fig04,fig13,fig17`: a verdict on every row; figure 13's
     rigid boundary along ω_p/p = 6 lies just above the paper's 5.85 (the computed margin), the
