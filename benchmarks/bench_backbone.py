@@ -22,7 +22,7 @@ For each backbone (bilinear, tanh) and θs/α ∈ {1e-3 … 3e-6}:
   in the spectra), best of two warm calls; for flexible columns also the default integrator's
   total error (backbone + time steps).
 
-`--part gradients`: derivatives through the bilinear backbone at θy = 1e-5 α. On 16 seeded scenes per model (a_p/(g tanα) 1.2–6,
+`--part gradients`: the defaults' derivatives. On 16 seeded scenes per model (a_p/(g tanα) 1.2–6,
 2h 5–30 m, tanα 0.12–0.3, ω_p/p 2–8), d max|θ|/α, d t_uplift and d t_overturn / d ln a_p in both
 autodiff modes against central differences (h = 1e-4 in ln a_p): quasi-rigid with Tsit5 1e-10 (the
 default) and generalized-α 1e-6 (forward), flexible with Kvaerno5 1e-8 and generalized-α 1e-6; and
@@ -183,11 +183,11 @@ def _relative(d, fd, floor):
 
 
 def gradients() -> None:
-    """Derivatives through the bilinear backbone at θy = 1e-5 α against central differences (issue 56, item 3)."""
+    """Derivatives of the defaults against central differences (issue 56, item 3)."""
     from jaxrock.analyses.free_rocking import SpringFamily, energy_ratio
 
     out("# bench_backbone --part gradients: derivatives against central differences (h = 1e-4 in ln a_p)")
-    out("# the bilinear backbone at θy = 1e-5 α (the default is tanh at θs = 1e-4 α)")
+    out(f"# defaults: backbone {jr.DEFAULT_BACKBONE} (by model), θs/α {jr.DEFAULT_SMOOTHING} (by backbone)")
     rng = np.random.default_rng(11)
     n = 16
     # a_p/(g tanα), 2h, tanα, ω_p/p: rocking scenes, a third or so overturning
@@ -213,7 +213,7 @@ def gradients() -> None:
                 def run(log_ar, h2, ta, wr):
                     blk = Block.from_slenderness(h2, ta)
                     ex = RickerPulse(*jr.pulse_of_ratios(blk, jnp.exp(log_ar), wr))
-                    s = jr.simulate(SpringModel(blk, column, backbone="bilinear", smoothing=1e-5), ex, integrator=integ)
+                    s = jr.simulate(SpringModel(blk, column), ex, integrator=integ)
                     return jnp.stack([s.max_theta, s.t_uplift, s.t_overturn])
 
                 x = jnp.log(scenes[0])

@@ -35,7 +35,7 @@ import numpy as np
 
 import jaxrock as jr
 from jaxrock import GeneralizedAlpha
-from jaxrock.spring.base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING
+from jaxrock.scene import default_spring
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_backbone import describe, sample  # noqa: E402  (the scene set of the backbone study)
@@ -53,7 +53,7 @@ def out(line: str = "") -> None:
 
 def run(scenes, integrator, timed=False):
     """max θ/α, status and seconds per scene of every scene with the default spring (`bench_backbone.run`)."""
-    return backbone_run(scenes, True, DEFAULT_BACKBONE, DEFAULT_SMOOTHING, integrator, timed)
+    return backbone_run(scenes, True, *default_spring(flexible=True), integrator, timed)
 
 
 def main() -> None:

@@ -12,8 +12,8 @@ arguments from it before JAX is loaded, and the classes it names are imported wh
 - Records: `RECORD_ALIASES`, the names of the packaged El Centro 1940 NS record; `PACKAGED_RECORDS`, the
   other packaged records; `BUILTIN_SUITE`, the name of all of them together.
 - Geometry: `TAN_ALPHA_MIN` and `check_slenderness`, the valid height and slenderness of a block.
-- Spring backbones: `BACKBONES` (name → class of `jaxrock.spring.base_spring`), `DEFAULT_BACKBONE`,
-  `DEFAULT_SMOOTHING`.
+- Spring backbones: `BACKBONES` (name → class of `jaxrock.spring.base_spring`), `DEFAULT_BACKBONE`
+  (by model), `DEFAULT_SMOOTHING` (by backbone), `default_spring`.
 - Ratios (SPEC "Spectra"): the spectra's axes a_p/(g tanα′) and ω_p/p′ (`AXES`), converted to and
   from the physical a_p [m/s²] and ω_p [rad/s] by `jaxrock.geometry.pulse_of_ratios` and
   `ratios_of_pulse` only (functions of a `Block`).
@@ -144,19 +144,30 @@ def check_slenderness(height, tan_alpha, tan_alpha_base=None) -> None:
 BACKBONES = {"bilinear": "Bilinear", "tanh": "Tanh"}  # name → a class of jaxrock.spring.base_spring (its `name`)
 # Backbone and θs/α′: the study of benchmarks/bench_backbone.py (its results file): 192 quasi-rigid
 # and 48 flexible (concrete, 10 elements) scenes, tanα 0.05–0.35, 2h 1–50 m, ω_p/p′ 1–15,
-# a_p/(g tanα) 1–8, both pulses; error of max|θ|/α against the sharp limit (bilinear, θy = 1e-6 α).
-# This default, tanh at θs = 1e-4 α, leaves up to 4.9e-2 (quasi-rigid) and 3.9e-2 (flexible), median
-# 1.7e-4 and 7.6e-4, the largest on antisymmetric pulses near a_p/(g tanα) ≈ 4, ω_p/p′ ≈ 4. The
-# bilinear backbone at θy = 1e-5 α (`backbone="bilinear", smoothing=1e-5`) is within 7.6e-4
-# (quasi-rigid) and 8.3e-4 (flexible) wherever the limit is settled. Its kinks are events of the
-# diffrax integrator, so derivatives through it are the motion's there (`bench_backbone.py --part
-# gradients`: calibration's reverse ∂r_eq²/∂c̄ within 1e-7 of central differences, d max θ / d ln a_p
-# within 1e-5); generalized-α steps over them (2.7 % median, and a run's sensitivity off). It is not
-# yet the default (issue 56): on the quasi-rigid model it costs 2.7× tanh's time on pulses (2.39 against
-# 0.88 ms/scene, the stiffer pre-yield branch under explicit steps), and the flexible default
-# integrator, generalized-α, does not stop on kinks.
-DEFAULT_SMOOTHING = 1e-4
-DEFAULT_BACKBONE = "tanh"
+# a_p/(g tanα) 1–8, both pulses, and new seeded scenes with records; error of max|θ|/α against the
+# sharp limit (bilinear, θy = 1e-6 α). The default, the bilinear backbone at θy = 1e-5 α (the
+# paper's rigid-plastic spring as OpenSees' multilinear one), is within 1e-3 wherever the limit is
+# settled; tanh at θs = 1e-4 α, the default before, left up to 4.9e-2 (quasi-rigid) and 3.9e-2
+# (flexible). Its kinks are events of the diffrax integrator (`SpringIntegrator`), so derivatives
+# through it are the motion's (`bench_backbone.py --part gradients`: calibration's reverse
+# ∂r_eq²/∂c̄ within 1e-7 of central differences, d max θ / d ln a_p within 1e-4); generalized-α
+# steps over them (its forward derivatives, and a run's sensitivity, then a few % to tens of %
+# off), so the flexible model, whose default integrator is generalized-α, keeps tanh at 1e-4 α
+# until generalized-α stops on the kinks too (issue 56).
+DEFAULT_BACKBONE = {"quasi-rigid": "bilinear", "flexible": "tanh"}  # per spring model
+DEFAULT_SMOOTHING = {"bilinear": 1e-5, "tanh": 1e-4}  # θs/α′ per backbone
+
+
+def default_spring(flexible: bool, backbone=None, smoothing=None):
+    """(backbone, smoothing) of a spring model, quasi-rigid or `flexible`: the defaults where None
+    (`DEFAULT_BACKBONE` by model, `DEFAULT_SMOOTHING` by backbone)."""
+    if backbone is None:
+        backbone = DEFAULT_BACKBONE["flexible" if flexible else "quasi-rigid"]
+    if smoothing is None:
+        smoothing = DEFAULT_SMOOTHING.get(backbone if isinstance(backbone, str) else getattr(backbone, "name", None))
+        if smoothing is None and (not isinstance(backbone, str) or backbone in BACKBONES):
+            raise JaxrockInputError(f"smoothing: no default for the backbone {backbone!r}; give one in (0, 1)")
+    return backbone, smoothing
 
 
 # -- ratios ----------------------------------------------------------------------------------------

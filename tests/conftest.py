@@ -42,7 +42,7 @@ MOVED_TO_SLOW = {
     "tests/test_generalized_alpha.py::test_jacfwd_in_a_p_matches_tsit5_on_random_scenes": "48 s; GA derivatives: jacfwd_wrt_cbar",
     "tests/test_generalized_alpha.py::test_fixed_base_resonant_pulse_matches_kvaerno5": "23 s; fixed base: fixed_base_quasi_static_cantilever",
     "tests/test_generalized_alpha.py::test_el_centro_quasi_rigid": "21 s; records: test_rigid, test_sweep",
-    "tests/test_gradients.py::test_spring_gradients_match_central_differences": "62 s; SM gradients: test_generalized_alpha jacfwd_wrt_cbar[quasi_rigid], test_calibration gradient_matches_finite_differences",
+    "tests/test_gradients.py::test_spring_gradients_match_central_differences": "118 s (and the converged run's gradient); SM gradients: test_generalized_alpha jacfwd_wrt_cbar[quasi_rigid], test_calibration gradient_matches_finite_differences",
     "tests/test_boundary.py::test_find_boundary_quasi_rigid_spring_model": "21 s; find_boundary: notebook 03 (CI)",
     "tests/test_boundary.py::test_find_boundary_least_base_width": "14 s; find_boundary: notebook 03 (CI)",
     # compiled kernels and schema plumbing

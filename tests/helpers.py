@@ -79,3 +79,13 @@ class Watch:
         self.proc.stdout.close()
         self.proc.stderr.close()
         return rc, out, self.text
+
+
+def pre_yield_rotation(model, ratio: float) -> float:
+    """θ/α′ of the spring model's base under a static M(θ) = ratio · My: smoothing · m⁻¹(ratio) for
+    the model's backbone m (bisection: written apart from the backbones' own solves)."""
+    lo, hi = 0.0, 50.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(model.backbone.unit_moment(mid)) < ratio else (lo, mid)
+    return float(model.smoothing) * lo

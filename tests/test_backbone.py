@@ -79,9 +79,10 @@ def test_backbone_by_name_and_bad_names():
 @pytest.mark.parametrize("name", ["bilinear", "tanh"])
 def test_below_uplift_the_base_follows_the_pre_yield_branch(name, integrator):
     """a_p = 0.5 g tanα never lifts the block. The base rotation follows the pre-yield spring
-    quasi-statically, M(θ) = m üg h: θ/α = smoothing · m⁻¹(0.5) (bilinear 5.000e-5, tanh
-    5.493e-5). Measured +0.4–0.8 % (the pre-yield frequency, 120 rad/s against ω_p = 6.3 rad/s,
-    adds a little dynamics). Bound 2 %."""
+    quasi-statically, M(θ) = m üg h: θ/α = smoothing · m⁻¹(0.5) (each backbone at its default
+    smoothing: bilinear 5.000e-6, tanh 5.493e-5). Measured +0.05 % bilinear (pre-yield frequency
+    ~380 rad/s), +0.4–0.8 % tanh (120 rad/s; against ω_p = 6.3 rad/s the dynamics add a little).
+    Bound 2 %."""
     model = SpringModel(BLOCK, backbone=name)
     s = simulate(model, pulse(0.5), integrator=integrator)
     assert s.status == Status.ok and not bool(s.uplifted)
@@ -149,17 +150,18 @@ def test_flexible_quasi_rigid_column_on_the_kink_matches_the_one_dof_model():
 
 
 def test_what_the_default_leaves_on_the_studys_worst_scene():
-    """benchmarks/bench_backbone.py's worst quasi-rigid scene for the default tanh at θs = 1e-4 α
-    (2h = 5.4 m, tanα = 0.182, ω_p/p = 3.70, a_p/(g tanα) = 4.05, antisymmetric): the default is
-    4.8e-2 from the sharp limit (bilinear, θy = 1e-6 α), as the README states; the bilinear
-    backbone at θy = 1e-5 α, recommended there for values, is within the 2e-3 target (measured
-    7.5e-4: this scene also carries the study's largest settled bilinear error, 7.6e-4)."""
+    """benchmarks/bench_backbone.py's worst quasi-rigid scene for the former default, tanh at
+    θs = 1e-4 α (2h = 5.4 m, tanα = 0.182, ω_p/p = 3.70, a_p/(g tanα) = 4.05, antisymmetric): tanh
+    is 4.8e-2 from the sharp limit (bilinear, θy = 1e-6 α); the quasi-rigid default, the bilinear
+    backbone at θy = 1e-5 α, is within the 1e-3 target (measured 7.5e-4 before its kinks were
+    events: this scene also carries the study's largest settled bilinear error)."""
     blk = Block.from_slenderness(5.37, 0.182)
     ex = AntisymmetricRickerPulse(4.05 * G * 0.182, 3.70 * float(blk.p_r))
     run = lambda **kw: float(simulate(SpringModel(blk, **kw), ex, integrator=TSIT5).max_theta)
     sharp = run(backbone="bilinear", smoothing=1e-6)
-    assert abs(run() - sharp) > 2e-2
-    assert abs(run(backbone="bilinear", smoothing=1e-5) - sharp) < 2e-3
+    assert SpringModel(blk).backbone == Bilinear() and float(SpringModel(blk).smoothing) == 1e-5
+    assert abs(run(backbone="tanh", smoothing=1e-4) - sharp) > 2e-2
+    assert abs(run() - sharp) < 1e-3
 
 
 def test_the_kink_is_an_event_so_derivatives_through_it_match_central_differences():

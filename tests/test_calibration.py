@@ -163,7 +163,7 @@ def test_report_writes_files(tmp_path):
 def test_energy_ratio_on_both_backbones_approaches_one_limit():
     """r_eq² of one free cycle (tanα = 0.2, c̄ of eq. 17) with the family's backbone: the bilinear
     spring at θy = 1e-5 α is 1.3e-6 (θ₀ = 0.5 α) and 1.8e-6 (0.9 α) from θy = 1e-6 α, first order;
-    the default tanh at 1e-4 α is 3.0e-5 and 2.8e-5 from it (measured). So the calibrated c̄ does
+    tanh at 1e-4 α (the default before) is 3.0e-5 and 2.8e-5 from it (measured). So the calibrated c̄ does
     not hang on the backbone."""
     r = lambda b, s, x: float(energy_ratio(SpringFamily(backbone=b, smoothing=s)(0.2, 0.0779), x))
     for x in (0.5, 0.9):

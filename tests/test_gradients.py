@@ -319,16 +319,30 @@ def test_spring_gradients_match_central_differences():
     max_theta 3.3e-6). Differences of the default integrator itself are noisier — 5.0e-5 at a
     step of 1e-4, 1.5e-4 at 1e-5: its adaptive step sequence jumps by O(rtol) from one parameter
     value to the next, which the difference divides by the step, while the gradient of a run is
-    that run's own derivative — so the reference is the converged run."""
+    that run's own derivative — so the reference is the converged run.
+
+    On the default bilinear spring (θy = 1e-5 α) the uplift time is where |θ| first crosses the
+    yield rotation, reached through the block's ringing on the stiff pre-yield branch: at 1e-10 it
+    is ~4e-7 s off the converged run's, and its gradient 2.0e-4 – 5.1e-4 (the same at difference
+    steps 1e-3 to 1e-5: an integration error, not the differences' noise); the converged run's
+    own gradient is within 7.4e-6 of the differences (checked here too, so the derivative of the
+    motion is right and only the default's tolerance limits t_uplift). Bounds: 1e-5, and 1e-3
+    for the default's t_uplift."""
     jac_p, val_p = _spring_programs()
     x = spring_scenes()
     jac, s = jac_p(jnp.asarray(x))
     jac = np.asarray(jac)
     assert np.all(np.asarray(s.status == jr.Status.ok)) and np.all(np.isfinite(jac))
     assert list(np.asarray(s.overturned)) == [False, False, False, True]
-    err = relative_error(jac, central_differences(x, 1e-4, lambda y: np.asarray(val_p(jnp.asarray(y))), bottom=SM_PARAMS.index("base")))
-    assert err.max() < 1e-5, np.array2string(err.max(axis=2), precision=1)
+    fd = central_differences(x, 1e-4, lambda y: np.asarray(val_p(jnp.asarray(y))), bottom=SM_PARAMS.index("base"))
+    err = relative_error(jac, fd)
+    assert err[:, [MAX_THETA, T_OVERTURN]].max() < 1e-5, np.array2string(err.max(axis=2), precision=1)
+    assert err[:, T_UPLIFT].max() < 1e-3, np.array2string(err.max(axis=2), precision=1)
     assert np.all(jac[3, MAX_THETA] == 0) and np.all(jac[:3, T_OVERTURN] == 0)
+    converged = SpringIntegrator(rtol=1e-12, atol=1e-12, solver="tsit5", max_steps=200_000)
+    jac12, _ = jax.jit(jax.vmap(jax.jacrev(lambda y: spring_summary(y, integrator=converged), has_aux=True)))(jnp.asarray(x))
+    err12 = relative_error(np.asarray(jac12), fd)
+    assert err12.max() < 1e-5, np.array2string(err12.max(axis=2), precision=1)
 
 
 @pytest.mark.slow

@@ -83,8 +83,8 @@ def test_a_finding_that_differs_carries_its_reason():
 @pytest.mark.timeout(1500)  # the subprocess's own limit (`_jaxrock`): 245 s cold alone on 2 cores (fig13 99 s, fig17 107 s), past pytest-timeout's 300 s beside another worker
 def test_reproduce_quick_subset_answers_both_open_questions_and_resumes(tmp_path):
     """`jaxrock reproduce --quick --only fig03,fig04,fig13,fig17`: a verdict on every row; figure 13's
-    rigid boundary along ω_p/p = 6 lies just above the paper's 5.85 (the computed margin), the
-    flexible one well above; the chimney's rocking moment is the uplift moment m g b′ plus a little
+    rigid boundary along ω_p/p = 6 lies just above the paper's 5.85 for the RM, at or below it for
+    the quasi-rigid SM (the paper's verdict), the flexible one well above; the chimney's rocking moment is the uplift moment m g b′ plus a little
     (the spring's yield caps it), its rotation is the paper's; a rerun resumes every step."""
     out = tmp_path / "rep"
     p = _jaxrock("reproduce", "--quick", "--only", "fig03,fig04,fig13,fig17", "--out", str(out), "-q", cwd=tmp_path)
@@ -96,10 +96,12 @@ def test_reproduce_quick_subset_answers_both_open_questions_and_resumes(tmp_path
     # question 1: the boundary table, and the verdict it explains
     table = (out / "fig13_boundaries.md").read_text(encoding="utf-8")
     least = {m.group(1).strip(): float(m.group(2)) for m in re.finditer(r"^\| ([^|]+) \| ([0-9.]+) \|", table, re.M)}
-    assert 5.85 < least["RM"] < 6.2 and 5.85 < least["quasi-rigid SM"] < 6.2, least
+    # the RM just above 5.85; the quasi-rigid SM on its default sharp (bilinear) spring, the paper's
+    # OpenSees model, at or just below it: the paper's verdict, rigid overturns, is reproduced
+    assert 5.85 < least["RM"] < 6.2 and 5.5 < least["quasi-rigid SM"] <= 5.85, least
     assert least["flexible SM"] > least["RM"] + 0.3, least
     pulse2 = next(r for r in rows if r["quantity"].startswith("pulse (ω_p/p, a_p/(g tanα)) = (6, 5.85)"))
-    assert pulse2["verdict"] == EXPLAINED and f"{least['RM']:.2f}" in pulse2["reason"]
+    assert pulse2["verdict"] == REPRODUCED, pulse2
     pulse1 = next(r for r in rows if r["quantity"].startswith("pulse (ω_p/p, a_p/(g tanα)) = (3, 2.6)"))
     assert pulse1["verdict"] == REPRODUCED
 

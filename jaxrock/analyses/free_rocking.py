@@ -11,7 +11,7 @@ paper's missing eq. 13, `rm_target`).
   (the spring's potential − m g h (1 − cosθ), e.g. ``My θs log cosh(θ/θs)`` for tanh, → SPEC's
   ``m g R (sinα|θ| − cosα(1 − cosθ))`` as θs → 0; at θs ≤ 10⁻⁴α′ the two ratios differ by
   < 5·10⁻⁴, and only the model's own energy gives exactly r_eq² = 1 without damping). On the
-  bilinear backbone the solve stops on its kinks
+  bilinear backbone (the quasi-rigid default) the solve stops on its kinks
   (`SpringIntegrator.solve_through`), so ∂r_eq²/∂c̄ is the motion's.
   The peak is located exactly: a `diffrax.Event` on the base velocity, ``s θ̇`` crossing zero
   downwards (s = sign θ₀), gated to the same side (``s θ > 0``) and to times after half the rigid
@@ -38,7 +38,7 @@ from jaxtyping import Array, Bool, Float
 from .._validate import JaxrockInputError, check_range
 from ..excitation import StillGround
 from ..geometry import Block
-from ..spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, Column, SpringIntegrator, SpringModel
+from ..spring import Column, SpringIntegrator, SpringModel
 
 
 #: Tolerances of the free-rocking solves: r_eq² to ~1e-8, so that finite differences and the
@@ -164,8 +164,8 @@ class SpringFamily(eqx.Module):
     Everything else is fixed: `height` (2h [m]; r_eq² of the quasi-rigid SM is size independent),
     `added_masses`, `tan_alpha_base` (None: plain block; else a fixed extended base tanα′, whose
     η′ is then the target), `column` (None: quasi-rigid one-DOF SM; or a `Column`), `backbone`
-    (the spring's, `jaxrock.spring.base_spring`; the smooth tanh by default: gradients through the bilinear
-    kink are not reliable, see `jaxrock.spring.DEFAULT_SMOOTHING`), `smoothing` (θs/α′), `zeta`,
+    (the spring's, `jaxrock.spring.base_spring`; None: the model's default, `SpringModel`),
+    `smoothing` (θs/α′; None: the backbone's default), `zeta`,
     `n_elements`. Hashable by value, so compiled calibrations are reused.
     """
 
@@ -173,8 +173,8 @@ class SpringFamily(eqx.Module):
     added_masses: bool = eqx.field(static=True, default=True)
     tan_alpha_base: float | None = None
     column: Column | None = None
-    backbone: str = eqx.field(static=True, default=DEFAULT_BACKBONE)
-    smoothing: float = DEFAULT_SMOOTHING
+    backbone: str | None = eqx.field(static=True, default=None)
+    smoothing: float | None = None
     zeta: float = 0.01
     n_elements: int = eqx.field(static=True, default=10)
 

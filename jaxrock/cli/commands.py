@@ -26,6 +26,8 @@ from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _axis
 
 FORCE_OPTION = typer.Option(False, "--force", help="let outputs replace existing files that jaxrock did not write "
                             "(without it such a file is refused; symbolic links always are)")
+BACKBONE_DEFAULTS = ", ".join(f"{v} {k}" for k, v in DEFAULT_BACKBONE.items())
+SMOOTHING_DEFAULTS = ", ".join(f"{v:g} {k}" for k, v in DEFAULT_SMOOTHING.items())
 UNDAMPED_HELP = "no energy loss: " + ", ".join(f"{k} = {v:g}" for k, v in UNDAMPED.items()) + " (whichever the model takes)"
 
 app = typer.Typer(
@@ -145,9 +147,9 @@ def simulate(
     E: Optional[float] = typer.Option(None, "--E", help=parameter_help("E")),
     rho: Optional[float] = typer.Option(None, help=parameter_help("rho")),
     zeta: Optional[float] = typer.Option(None, help=parameter_help("zeta")),
-    backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {DEFAULT_BACKBONE}; bilinear with "
-                                                    "--smoothing 1e-5 is within 1e-3 of the sharp limit, README)"),
-    smoothing: Optional[float] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1) (default {DEFAULT_SMOOTHING:g})"),
+    backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {BACKBONE_DEFAULTS}; the bilinear "
+                                                    "at θy = 1e-5 α′ is within 1e-3 of the sharp limit, README)"),
+    smoothing: Optional[float] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1) (default {SMOOTHING_DEFAULTS})"),
     tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
     plot: Optional[str] = typer.Option(None, help="write a time-history plot here (PNG; another suffix matplotlib knows, e.g. .pdf, "
                                        "picks that format)"),
@@ -337,7 +339,7 @@ def sweep(
     rho: Optional[str] = typer.Option(None, help=f"{parameter_help('rho')}: {_LIST}"),
     zeta: Optional[str] = typer.Option(None, help=f"{parameter_help('zeta')}: {_LIST}"),
     smoothing: Optional[str] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1): {_LIST}"),
-    backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {DEFAULT_BACKBONE})"),
+    backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {BACKBONE_DEFAULTS})"),
     tol: Optional[float] = typer.Option(None, help="spring models: generalized-α at this local tolerance (default: the model's default integrator)"),
     store: Path = typer.Option(Path("out/sweep.zarr"), help="the Zarr store (xarray.open_zarr reads it); a rerun of the same "
                                "command resumes it, one with other parameters is refused"),

@@ -53,9 +53,9 @@ import time
 import numpy as np
 import openseespy.opensees as ops
 
+from ..scene import DEFAULT_BACKBONE, DEFAULT_SMOOTHING  # jaxrock's spring defaults (scene: no JAX import)
+
 G = 9.81
-DEFAULT_SMOOTHING = 1e-4  # θs/α′, jaxrock.spring.DEFAULT_SMOOTHING
-DEFAULT_BACKBONE = "tanh"  # jaxrock.spring.DEFAULT_BACKBONE
 X_PULSE = 8.0  # pulse window ω_p t ∈ [−X, X]
 _X_PEAK = math.sqrt(9 - math.sqrt(54))  # where the antisymmetric shape of eq. 29 peaks
 ANTI_BETA = abs((_X_PEAK**2 / 3 - 3) * (_X_PEAK / math.sqrt(3)) * math.exp(-(_X_PEAK**2) / 6))  # β ≈ 1.38011905
@@ -67,8 +67,7 @@ ANTI_BETA = abs((_X_PEAK**2 / 3 - 3) * (_X_PEAK / math.sqrt(3)) * math.exp(-(_X_
 class Scene:
     """Geometry and derived constants of a SM scene (full height `height`, width `width`)."""
 
-    def __init__(self, height, width, *, E=None, rho=2500.0, n_elements=10, smoothing=DEFAULT_SMOOTHING,
-                 backbone=DEFAULT_BACKBONE,
+    def __init__(self, height, width, *, E=None, rho=2500.0, n_elements=10, smoothing=None, backbone=None,
                  cbar=None, zeta=0.01, added_masses=True, base_width=None):
         self.h = 0.5 * height
         self.b = 0.5 * width
@@ -86,8 +85,9 @@ class Scene:
         self.dI = self.Itot - (4 / 3) * self.m * self.h**2
         self.p = math.sqrt(G * self.Rr * self.m / self.Itot)
         self.My = self.m * G * self.bb
-        self.theta_s = smoothing * self.alpha
-        self.backbone = backbone
+        # jaxrock's defaults: E None is its quasi-rigid one-DOF model
+        self.backbone = DEFAULT_BACKBONE["quasi-rigid" if E is None else "flexible"] if backbone is None else backbone
+        self.theta_s = (DEFAULT_SMOOTHING[self.backbone] if smoothing is None else smoothing) * self.alpha
         self.cbar = 0.02 * (self.alpha / 0.1) ** 2 if cbar is None else cbar
         self.c = self.cbar * self.m * math.sqrt(G) * self.Rr**1.5
         self.zeta = zeta

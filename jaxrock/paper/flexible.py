@@ -149,8 +149,8 @@ def fig13(out: Path, *, n_elements: int = 10, quick: bool = False) -> list[Findi
             "RM, η = 1 (no impact loss)": RigidModel(block, eta=1.0),
             "quasi-rigid SM, c̄ = 0 (no damper)": SpringModel(block, cbar=0.0),
             "quasi-rigid SM without added masses": SpringModel(block, added_masses=False),
-            "quasi-rigid SM, bilinear backbone": SpringModel(block, backbone="bilinear"),
-            "quasi-rigid SM, θs 10× the default": SpringModel(block, smoothing=1e-3),
+            "quasi-rigid SM, tanh backbone at θs = 1e-4 α′ (the default before)": SpringModel(block, backbone="tanh", smoothing=1e-4),
+            "quasi-rigid SM, θy 10× the default": SpringModel(block, smoothing=1e-4),
             "quasi-rigid beam (E = 10¹⁴ Pa, the paper's 'rigid')": SpringModel(block, Column.quasi_rigid(), n_elements=n_elements),
             f"flexible SM, {2 * n_elements} elements": _concrete(block, 2 * n_elements),
         })
@@ -163,18 +163,19 @@ def fig13(out: Path, *, n_elements: int = 10, quick: bool = False) -> list[Findi
         "| model | least overturning a_p/(g tanα) | against 5.85 |\n| --- | --- | --- |\n"
         + "".join(f"| {name} | {lo:.3f} | {100 * (lo / 5.85 - 1):+.1f} % |\n" for name, (lo, _) in margins.items()))
     v = verdicts[6.0]
-    ok = not v["flexible SM"][0] and v["RM"][0]
+    # the paper's rigid column is its spring model with a stiff column (OpenSees, a sharp spring)
+    ok = not v["flexible SM"][0] and (v["RM"][0] or v["quasi-rigid SM"][0])
     rigid_lo = min(margins["RM"][0], margins["quasi-rigid SM"][0])
     moved = [name for name, (lo, _) in margins.items() if "flexible" not in name and lo <= 5.85]
-    explanation = (f"along ω_p/p = 6 the rigid models first overturn at a_p/(g tanα) = {margins['RM'][0]:.2f} (RM) and "
-                   f"{margins['quasi-rigid SM'][0]:.2f} (quasi-rigid SM), {100 * (rigid_lo / 5.85 - 1):+.1f} % or more above the "
-                   f"paper's 5.85; the flexible SM at {margins['flexible SM'][0]:.2f}. "
+    explanation = ("along ω_p/p = 6 the rigid models first overturn at a_p/(g tanα) = "
+                   + " and ".join(f"{margins[k][0]:.2f} ({k}, {100 * (margins[k][0] / 5.85 - 1):+.1f} %)" for k in ("RM", "quasi-rigid SM"))
+                   + f" against the paper's 5.85; the flexible SM at {margins['flexible SM'][0]:.2f}. "
                    + (f"Variants that overturn at 5.85: {', '.join(moved)}. " if moved else
                       "None of the variants computed moves the rigid boundary to 5.85 or below. ")
                    + "The pulse lies close to the rigid boundary, where a few per cent in a_p change the verdict "
                    "(all boundaries: fig13_boundaries.md)")
     findings.append(Finding("13", "pulse (ω_p/p, a_p/(g tanα)) = (6, 5.85)", "the flexible column survives, the rigid one overturns",
-                            text[6.0], "", "flexible SM survives; RM overturns", judged(ok, explanation),
+                            text[6.0], "", "flexible SM survives; the RM or the quasi-rigid SM overturns", judged(ok, explanation),
                             "" if ok else explanation))
     findings.append(Finding("13", "least overturning a_p/(g tanα) at ω_p/p = 6 (the rigid boundary beside the pulse)", "≤ 5.85 (rigid overturns)",
                             "; ".join(rows), "", "rigid boundary ≤ 5.85", judged(rigid_lo <= 5.85, explanation),

@@ -36,11 +36,11 @@ against Tsit5's reverse gradient was 250 % without the limit and 0.5 % with `cro
 The local error is Zienkiewicz & Xie's estimate ``dt² (β − 1/6)(a₁ − a₀)`` in a max norm,
 componentwise against ``atol·scale + rtol·|q|`` (scale: α′ for rotations, 2h α′ for displacements).
 Forward-mode differentiable (`jax.jvp`, `jax.jacfwd`: the loops are `lax.while_loop`s); for
-reverse mode use the diffrax `SpringIntegrator`. On a kinked backbone (the bilinear) its steps
-step over the kinks, which the diffrax integrator stops on: its values
+reverse mode use the diffrax `SpringIntegrator`. On a kinked backbone (the bilinear, the quasi-rigid
+model's default) its steps step over the kinks, which the diffrax integrator stops on: its values
 are right (`benchmarks/bench_backbone.py`), its derivatives and a run's sensitivity are not (d max θ
 / d ln a_p a few % from central differences, `bench_backbone.py --part gradients`): use the smooth
-tanh backbone (the default) or the `SpringIntegrator` for them.
+tanh backbone (the flexible model's default) or the `SpringIntegrator` for them.
 """
 
 from __future__ import annotations

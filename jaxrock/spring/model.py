@@ -21,7 +21,8 @@ from ..geometry import G, Block
 from ..model import AbstractModel, AbstractSpringIntegrator, check_autodiff
 from ..scene import CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA
 from . import beam
-from .base_spring import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, AbstractBackbone, as_backbone
+from ..scene import default_spring
+from .base_spring import AbstractBackbone, as_backbone
 from .column import Column, cbar_eq17, pushover_eq9
 from .diffrax_integrator import SpringIntegrator
 from .checked import Checked
@@ -39,9 +40,15 @@ class SpringModel(AbstractModel):
     - `added_masses` (static): add ΔI = I′o − (4/3) m h² (SPEC; paper section 3.3);
     - `cbar`: damper coefficient c̄ (None: eq. 17 with α′, resolved at construction: always an array);
     - `backbone` (static): the spring's moment–rotation curve, `jaxrock.Bilinear` or
-      `Tanh` (or their names; default `DEFAULT_BACKBONE`);
+      `Tanh` (or their names; default `DEFAULT_BACKBONE`: the bilinear, the paper's rigid-plastic
+      spring, for the quasi-rigid SM; tanh for a flexible column, whose default generalized-α
+      integrator steps over the bilinear's kinks);
     - `smoothing`: θs/α′, the backbone's pre-yield rotation (the bilinear yield rotation θy, or
-      the tanh's θs; default `DEFAULT_SMOOTHING`);
+      the tanh's θs; default `DEFAULT_SMOOTHING`: 1e-5 bilinear, 1e-4 tanh). What the defaults
+      leave, over `benchmarks/bench_backbone.py`'s scenes: the quasi-rigid bilinear at 1e-5 within
+      1e-3 of α of the rigid-plastic limit wherever that limit is settled, its derivatives the
+      motion's (the diffrax integrator stops on the kinks); the flexible tanh at 1e-4 up to 3.9e-2
+      of α (median 7.6e-4) — pass `backbone="bilinear"` for values within 1e-3 there;
     - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
       at the first fixed-base period of the discretised column *with its added rotational masses*
       (`first_period`; they lengthen it a little, `tests/test_spring.py`);
@@ -67,8 +74,8 @@ class SpringModel(AbstractModel):
         *,
         added_masses: bool = True,
         cbar=None,
-        backbone: AbstractBackbone | str = DEFAULT_BACKBONE,
-        smoothing=DEFAULT_SMOOTHING,
+        backbone: AbstractBackbone | str | None = None,
+        smoothing=None,
         zeta=CONCRETE_ZETA,
         n_elements: int = 10,
         fixed_base: bool = False,
@@ -84,6 +91,7 @@ class SpringModel(AbstractModel):
         self.column = column
         self.added_masses = bool(added_masses)
         self.cbar = cbar_eq17(block.alpha_r) if cbar is None else jnp.asarray(cbar, dtype=float)
+        backbone, smoothing = default_spring(column is not None, backbone, smoothing)
         self.backbone = as_backbone(backbone)
         self.smoothing = jnp.asarray(smoothing, dtype=float)
         self.zeta = jnp.asarray(zeta, dtype=float)
@@ -273,8 +281,7 @@ def _pushover(system: SpringSystem, theta):
 def quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -> SpringModel:
     """A scenes file's quasi-rigid spring model (added masses; default damper, backbone, smoothing):
     the builder of the model kind "spring" (`jaxrock.scene.MODEL_KINDS`)."""
-    return SpringModel(block, None, cbar=cbar, backbone=DEFAULT_BACKBONE if backbone is None else backbone,
-                       smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
+    return SpringModel(block, None, cbar=cbar, backbone=backbone, smoothing=smoothing)
 
 
 def flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None) -> SpringModel:
@@ -282,5 +289,4 @@ def flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbon
     builder of the model kind "spring-flexible" (`jaxrock.scene.MODEL_KINDS`)."""
     column = Column(CONCRETE_E if E is None else E, CONCRETE_RHO if rho is None else rho)
     return SpringModel(block, column, zeta=CONCRETE_ZETA if zeta is None else zeta, cbar=cbar,
-                       backbone=DEFAULT_BACKBONE if backbone is None else backbone,
-                       smoothing=DEFAULT_SMOOTHING if smoothing is None else smoothing)
+                       backbone=backbone, smoothing=smoothing)
