@@ -27,7 +27,6 @@ MOVED_TO_SLOW = {
     "tests/test_cli.py::test_spectrum_tol_runs_generalized_alpha": "18 s; GA: test_generalized_alpha",
     "tests/test_cli.py::test_simulate_spring_backbone_options_are_the_models": "19 s; CLI = library: spectrum_writes_nc_equal_to_library",
     # the paper's values (the quick reproduce covers them in .ci/run; fast findings stay)
-    "tests/test_paper.py::test_reproduce_quick_subset_answers_both_open_questions_and_resumes": "245 s cold; figure 13: test_spring",
     "tests/test_spring.py::test_chimney_rocking_cuts_base_moment": "28 s; figure 17: the quick reproduce",
     # models and integrators
     "tests/test_checked.py::test_checked_keeps_the_run_and_is_honest_on_a_grid": "69 s; Checked: judges_a_diffrax_run_both_ways (slow too), the stability command",
