@@ -19,6 +19,7 @@ from ..geometry import Block, pulse_of_ratios
 from ..model import simulate
 from ..plotting import plot_boundaries, plot_history, plot_spectra_grid
 from ..results import Save, status_names
+from ..scene import DEFAULT_SMOOTHING
 from ..rigid import RigidModel
 from ..spring import Column, SpringModel, first_period_eq21
 from ..analyses.spectra import overturning_spectrum
@@ -150,7 +151,7 @@ def fig13(out: Path, *, n_elements: int = 10, quick: bool = False) -> list[Findi
             "quasi-rigid SM, c̄ = 0 (no damper)": SpringModel(block, cbar=0.0),
             "quasi-rigid SM without added masses": SpringModel(block, added_masses=False),
             "quasi-rigid SM, tanh backbone at θs = 1e-4 α′ (the default before)": SpringModel(block, backbone="tanh", smoothing=1e-4),
-            "quasi-rigid SM, θy 10× the default": SpringModel(block, smoothing=1e-4),
+            "quasi-rigid SM, θy 10× the default": SpringModel(block, smoothing=10 * DEFAULT_SMOOTHING["bilinear"]),
             "quasi-rigid beam (E = 10¹⁴ Pa, the paper's 'rigid')": SpringModel(block, Column.quasi_rigid(), n_elements=n_elements),
             f"flexible SM, {2 * n_elements} elements": _concrete(block, 2 * n_elements),
         })
