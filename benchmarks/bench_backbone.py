@@ -29,8 +29,12 @@ default) and generalized-α 1e-6 (forward), flexible with Kvaerno5 1e-8 and gene
 calibration's reverse-mode ∂r_eq²/∂c̄ (Tsit5 1e-10 and 1e-12; tanα = 0.2, c̄ = 0.08, θ₀ = 0.7 α)
 for tanh at θs = 1e-4 α and the bilinear backbone at θy = 1e-5 α.
 
+`--part cost`: where the sharp spring's cost comes from: steps and warm ms per scene of the
+quasi-rigid SM on 64 seeded pulses, tanh and bilinear at θs = 1e-4 and 1e-5 α (Tsit5, the default),
+and Kvaerno5 on the bilinear.
+
 The printed tables are also written to benchmarks/results/bench_backbone.txt (and
-bench_backbone_gradients.txt).
+bench_backbone_gradients.txt, bench_backbone_cost.txt).
 """
 
 from __future__ import annotations
@@ -237,9 +241,31 @@ def gradients() -> None:
             out(f"{backbone:9s} {s:6.0e} {'Tsit5 ' + format(tol, 'g'):>18s}  {g:.8f}  {fd:.8f}  relative {abs(g - fd) / abs(fd):.1e}")
 
 
+def cost() -> None:
+    """Where the sharp spring's cost comes from: steps and warm time per scene of the quasi-rigid SM
+    on 64 seeded pulses (seed 5, batches of 32 by pulse shape) for each backbone at θs = 1e-4 and
+    1e-5 α under the default integrator, and an L-stable solver on the bilinear (issue 56, item 2)."""
+    out("# bench_backbone --part cost: quasi-rigid SM, 64 seeded pulses (seed 5), warm ms and steps per scene")
+    scenes = sample(64, np.random.default_rng(5))
+    settings = [(b, th, "Tsit5 1e-10 (default)", None) for b in ("tanh", "bilinear") for th in (1e-4, 1e-5)]
+    settings.append(("bilinear", 1e-5, "Kvaerno5 1e-8", SpringIntegrator(rtol=1e-8, atol=1e-8, solver="kvaerno5")))
+    out(f"{'backbone':9s} {'θs/α':>6s} {'integrator':>22s} {'ms/scene':>9s} {'steps/scene':>12s}")
+    for backbone, th, name, integrator in settings:
+        seconds, steps = 0.0, 0
+        for kind in ("sym", "anti"):
+            models, exc = batch(scenes, np.flatnonzero(scenes["kind"] == kind), False, backbone, th, kind)
+            go = lambda: jax.block_until_ready(jr.run_batch(models, exc, integrator, model_batched=True))
+            go()
+            t = time.perf_counter()
+            sol = go()
+            seconds += time.perf_counter() - t
+            steps += int(np.asarray(sol.n_iterations).sum())
+        out(f"{backbone:9s} {th:6.0e} {name:>22s} {1e3 * seconds / 64:9.2f} {steps / 64:12.0f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--part", choices=("study", "gradients"), default="study")
+    ap.add_argument("--part", choices=("study", "gradients", "cost"), default="study")
     ap.add_argument("--quick", action="store_true", help="a few scenes (smoke run)")
     ap.add_argument("--n-rigid", type=int, default=192, help="quasi-rigid scenes")
     ap.add_argument("--n-flex", type=int, default=48, help="flexible scenes")
@@ -249,6 +275,10 @@ def main() -> None:
     ap.add_argument("--n-records-flex", type=int, default=8, help="new flexible El Centro scenes")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
+    if args.part == "cost":
+        cost()
+        (HERE / "results" / "bench_backbone_cost.txt").write_text("\n".join(LINES) + "\n")
+        return
     if args.part == "gradients":
         gradients()
         (HERE / "results" / "bench_backbone_gradients.txt").write_text("\n".join(LINES) + "\n")
