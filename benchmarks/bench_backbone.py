@@ -191,17 +191,32 @@ def _relative(d, fd, floor):
     return np.where(ok, np.abs(d - fd) / np.maximum(np.abs(fd), floor), np.nan), ok
 
 
+def gradient_scenes(n=16):
+    """(a_p/(g tanα), 2h, tanα, ω_p/p) of the derivative parts' seeded scenes: rocking, a third or so
+    overturning."""
+    rng = np.random.default_rng(11)
+    return tuple(jnp.asarray(x) for x in (rng.uniform(1.2, 6.0, n), rng.uniform(5, 30, n), rng.uniform(0.12, 0.3, n),
+                                          rng.uniform(2, 8, n)))
+
+
+def pulse_summary(integrator, column=None, **spring):
+    """(ln a_p/(g tanα), 2h, tanα, ω_p/p) → [max θ/α, t_uplift, t_overturn] of the SM under a Ricker pulse."""
+    def run(log_ar, h2, ta, wr):
+        blk = Block.from_slenderness(h2, ta)
+        ex = RickerPulse(*jr.pulse_of_ratios(blk, jnp.exp(log_ar), wr))
+        s = jr.simulate(SpringModel(blk, column, **spring), ex, integrator=integrator)
+        return jnp.stack([s.max_theta, s.t_uplift, s.t_overturn])
+
+    return run
+
+
 def gradients() -> None:
     """Derivatives of the defaults against central differences (issue 56, item 3)."""
     from jaxrock.analyses.free_rocking import SpringFamily, energy_ratio
 
     out("# bench_backbone --part gradients: derivatives against central differences (h = 1e-4 in ln a_p)")
     out(f"# defaults: backbone {jr.DEFAULT_BACKBONE} (by model), θs/α {jr.DEFAULT_SMOOTHING} (by backbone)")
-    rng = np.random.default_rng(11)
-    n = 16
-    # a_p/(g tanα), 2h, tanα, ω_p/p: rocking scenes, a third or so overturning
-    scenes = tuple(jnp.asarray(x) for x in (rng.uniform(1.2, 6.0, n), rng.uniform(5, 30, n), rng.uniform(0.12, 0.3, n),
-                                             rng.uniform(2, 8, n)))
+    scenes = gradient_scenes()
     h = 1e-4
     outputs = ("max_theta", "t_uplift", "t_overturn")
     floors = {"max_theta": 0.05, "t_uplift": 0.01, "t_overturn": 0.01}  # the scale below which an error is absolute
@@ -222,15 +237,8 @@ def gradients() -> None:
         for mode in ("forward", "reverse"):
             if mode == "reverse" and "generalized" in iname:
                 continue  # forward mode only
-            integ = make(mode)
             t = time.perf_counter()
-
-            def run(log_ar, h2, ta, wr):
-                blk = Block.from_slenderness(h2, ta)
-                ex = RickerPulse(*jr.pulse_of_ratios(blk, jnp.exp(log_ar), wr))
-                s = jr.simulate(SpringModel(blk, column, **spring), ex, integrator=integ)
-                return jnp.stack([s.max_theta, s.t_uplift, s.t_overturn])
-
+            run = pulse_summary(make(mode), column, **spring)
             x = jnp.log(scenes[0])
             f = jax.jit(jax.vmap(run))
             derivative = jax.jacfwd(run) if mode == "forward" else jax.jacrev(run)
@@ -259,20 +267,16 @@ def sawtooth() -> None:
     forward mode, stopping on the kinks). A smooth discrete map gives one value in every column;
     a sawtooth gives the motion's at large h and its teeth's slope (`jacfwd`'s) at small h."""
     out("# bench_backbone --part sawtooth: quasi-rigid, generalized-α 1e-8, d max θ/d ln a_p")
-    rng = np.random.default_rng(11)
-    sc = [rng.uniform(1.2, 6.0, 16), rng.uniform(5, 30, 16), rng.uniform(0.12, 0.3, 16), rng.uniform(2, 8, 16)]
+    sc = gradient_scenes()
     hs = (1e-2, 1e-3, 1e-5, 1e-7)
     out(f"{'backbone':9s} {'θs/α':>6s} {'scene':>5s} {'max θ/α':>8s} {'motion':>9s} {'jacfwd':>9s}  " + " ".join(f"{'cd h=' + format(h, 'g'):>10s}" for h in hs))
     for backbone, smoothing in (("bilinear", 1e-5), ("tanh", 1e-4)):
-        def make(integ):
-            def run(log_ar, h2, ta, wr):
-                blk = Block.from_slenderness(h2, ta)
-                ex = RickerPulse(*jr.pulse_of_ratios(blk, jnp.exp(log_ar), wr))
-                return jr.simulate(SpringModel(blk, backbone=backbone, smoothing=smoothing), ex, integrator=integ).max_theta
-            return run
+        def max_theta(integrator):
+            run = pulse_summary(integrator, backbone=backbone, smoothing=smoothing)
+            return lambda *a: run(*a)[0]
 
-        ga = make(GeneralizedAlpha(1e-8, 1e-8))
-        ref = make(SpringIntegrator(1e-11, 1e-11, "tsit5", max_steps=400_000, autodiff="forward"))
+        ga = max_theta(GeneralizedAlpha(1e-8, 1e-8))
+        ref = max_theta(SpringIntegrator(1e-11, 1e-11, "tsit5", max_steps=400_000, autodiff="forward"))
         f, d_ga, d_ref = jax.jit(ga), jax.jit(jax.jacfwd(ga)), jax.jit(jax.jacfwd(ref))
         for i in range(6):
             a = (jnp.log(sc[0][i]), sc[1][i], sc[2][i], sc[3][i])
@@ -315,17 +319,9 @@ def main() -> None:
     ap.add_argument("--n-records-flex", type=int, default=8, help="new flexible El Centro scenes")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
-    if args.part == "cost":
-        cost()
-        (HERE / "results" / "bench_backbone_cost.txt").write_text("\n".join(LINES) + "\n")
-        return
-    if args.part == "sawtooth":
-        sawtooth()
-        (HERE / "results" / "bench_backbone_sawtooth.txt").write_text("\n".join(LINES) + "\n")
-        return
-    if args.part == "gradients":
-        gradients()
-        (HERE / "results" / "bench_backbone_gradients.txt").write_text("\n".join(LINES) + "\n")
+    if args.part != "study":
+        {"gradients": gradients, "sawtooth": sawtooth, "cost": cost}[args.part]()
+        (HERE / "results" / f"bench_backbone_{args.part}.txt").write_text("\n".join(LINES) + "\n")
         return
     if args.quick:
         args.n_rigid, args.n_flex, args.n_rigid_new, args.n_records, args.n_flex_new, args.n_records_flex = 8, 4, 4, 2, 2, 2
