@@ -34,6 +34,9 @@ for tanh at θs = 1e-4 α and the bilinear backbone at θy = 1e-5 α.
 `--part sawtooth`: why generalized-α's derivatives through the bilinear's kinks are off: d max θ/d ln a_p
 by `jacfwd` at tolerance 1e-8 against central differences at h = 1e-2 … 1e-7 and the motion's.
 
+`--part tolerance`: the quasi-rigid default's tolerance by convergence over the study's scenes (Tsit5
+1e-9 … 1e-11 against 1e-12).
+
 `--part cost`: where the sharp spring's cost comes from: steps and warm ms per scene of the
 quasi-rigid SM on 64 seeded pulses, tanh and bilinear at θs = 1e-4 and 1e-5 α (Tsit5, the default),
 and Kvaerno5 on the bilinear.
@@ -307,9 +310,41 @@ def cost() -> None:
         out(f"{backbone:9s} {th:6.0e} {name:>22s} {1e3 * seconds / 64:9.2f} {steps / 64:12.0f}")
 
 
+def tolerance() -> None:
+    """The quasi-rigid default's tolerance, chosen by convergence over the study's scenes (issue 56,
+    item 3): the default model (bilinear, θy = 1e-5 α) under Tsit5 at 1e-9 … 1e-11 against Tsit5 at
+    1e-12 (whose own error is estimated by |1e-12 − 1e-13|), on the study's 192 pulse scenes (seed 0)
+    and its new ones (seed 1: 56 pulses, 24 El Centro records, apart): max, p99 and median |Δ max θ/α| (verdict
+    changes apart), failures, warm ms per scene."""
+    out("# bench_backbone --part tolerance: the quasi-rigid default (bilinear 1e-5) under Tsit5, error against Tsit5 1e-12")
+    rng, rng_new = np.random.default_rng(0), np.random.default_rng(1)
+    new = sample(56, rng_new, 24)
+    part = lambda idx: {k: v[idx] for k, v in new.items()}
+    records = new["kind"] == "record"
+    sets = (("192 pulses (seed 0)", sample(192, rng)), ("56 new pulses (seed 1)", part(~records)),
+            ("24 El Centro 1940 NS scaled to PGA/(g tanα) ∈ [1, 4] (seed 1)", part(records)))
+    tsit5 = lambda tol: SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=400_000)
+    for title, scenes in sets:
+        out(f"\n## {title}")
+        t = time.perf_counter()
+        ref, ref_st, ref_cost = run(scenes, False, "bilinear", 1e-5, tsit5(1e-12), timed=True)
+        ref13, _, _ = run(scenes, False, "bilinear", 1e-5, tsit5(1e-13))
+        own = np.abs(ref - ref13)
+        out(f"reference Tsit5 1e-12 ({time.perf_counter() - t:.0f} s, failed {int(np.sum(ref_st != 0))}, {ref_cost * 1e3:.2f} ms/scene); "
+            f"its own error |1e-12 − 1e-13|: max {own.max():.1e}, median {np.median(own):.1e}")
+        out(f"{'Tsit5 tol':>9s} {'max err':>9s} {'p99':>9s} {'median':>9s} {'verdicts':>8s} {'failed':>6s} {'ms/scene':>9s}  largest at")
+        for tol in (1e-9, 1e-10, 1e-11):
+            th, st, cost = run(scenes, False, "bilinear", 1e-5, tsit5(tol), timed=True)
+            flip = (th >= 1) != (ref >= 1)
+            err = np.abs(th - ref)[~flip]
+            i_max = np.flatnonzero(~flip)[np.argmax(err)]
+            out(f"{tol:9.0e} {err.max():9.2e} {np.quantile(err, 0.99):9.2e} {np.median(err):9.2e} {int(flip.sum()):8d} "
+                f"{int(np.sum(st != 0)):6d} {cost * 1e3:9.2f}  {describe(scenes, i_max)}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--part", choices=("study", "gradients", "sawtooth", "cost"), default="study")
+    ap.add_argument("--part", choices=("study", "gradients", "sawtooth", "cost", "tolerance"), default="study")
     ap.add_argument("--quick", action="store_true", help="a few scenes (smoke run)")
     ap.add_argument("--n-rigid", type=int, default=192, help="quasi-rigid scenes")
     ap.add_argument("--n-flex", type=int, default=48, help="flexible scenes")
@@ -320,7 +355,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
     if args.part != "study":
-        {"gradients": gradients, "sawtooth": sawtooth, "cost": cost}[args.part]()
+        {"gradients": gradients, "sawtooth": sawtooth, "cost": cost, "tolerance": tolerance}[args.part]()
         (HERE / "results" / f"bench_backbone_{args.part}.txt").write_text("\n".join(LINES) + "\n")
         return
     if args.quick:

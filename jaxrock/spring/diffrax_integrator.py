@@ -30,7 +30,7 @@ from jaxtyping import Array
 from .. import _linalg
 from .._validate import JaxrockInputError
 from ..bookkeeping import Record
-from ..excitation import AbstractExcitation
+from ..excitation import AbstractExcitation, Record as SampledRecord
 from .._rootfind import SafeNewton
 from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
@@ -56,6 +56,9 @@ class SpringIntegrator(AbstractSpringIntegrator):
     atol: float = eqx.field(static=True, default=1e-6)
     solver: str = eqx.field(static=True, default="kvaerno5")
     max_steps: int = eqx.field(static=True, default=20_000)
+    # rtol = atol on sampled records (None: rtol, atol as on analytic pulses): the quasi-rigid default
+    # is looser there, where a tighter tolerance costs 1.5x (`SpringModel.default_integrator`)
+    record_tol: float | None = eqx.field(static=True, default=None)
     chunk_steps: int = eqx.field(static=True, default=128)  # a summary's steps per piece in a batch (`DiffraxSpringStepper`)
     root_finder: str = eqx.field(static=True, default="newton")
     autodiff: str = eqx.field(static=True, default="reverse")  # or "forward": see model.diffrax_adjoint
@@ -66,6 +69,8 @@ class SpringIntegrator(AbstractSpringIntegrator):
             raise JaxrockInputError(f"solver = {self.solver!r}; valid: {tuple(_SOLVERS)}")
         if not (0 < self.rtol < 1) or not (0 < self.atol < 1):
             raise JaxrockInputError(f"rtol = {self.rtol:g}, atol = {self.atol:g}: both must be in (0, 1)")
+        if self.record_tol is not None and not (0 < self.record_tol < 1):
+            raise JaxrockInputError(f"record_tol = {self.record_tol:g}: must be in (0, 1)")
         if self.root_finder not in ("newton", "chord"):
             raise JaxrockInputError(f"root_finder = {self.root_finder!r}; valid: ('newton', 'chord')")
         if self.max_steps < 16:
@@ -101,12 +106,21 @@ class SpringIntegrator(AbstractSpringIntegrator):
             rf = with_stepsize_controller_tols(diffrax.VeryChord)(linear_solver=_linalg.SequentialLU())
         return _IMPLICIT[self.solver](root_finder=rf)
 
+    def tolerances(self, excitation: AbstractExcitation) -> tuple[float, float]:
+        """(rtol, atol) of the step-size control on `excitation`: `record_tol` on a sampled record
+        where it is given, else the fields."""
+        if self.record_tol is not None and isinstance(excitation, SampledRecord):
+            return self.record_tol, self.record_tol
+        return self.rtol, self.atol
+
     def controller(self, system: SpringSystem, excitation: AbstractExcitation, dtmax=None, t0=0.0, max_steps=None):
         """The step-size controller of a solve from `t0` of at most `max_steps` steps (None: the
-        integrator's): PID, clipped to the excitation's `step_ts` that the solve can reach."""
+        integrator's): PID at `tolerances(excitation)`, clipped to the excitation's `step_ts` that
+        the solve can reach."""
+        rtol, atol = self.tolerances(excitation)
         pid = diffrax.PIDController(
-            rtol=self.rtol,
-            atol=self.atol * system.atol_scale(),
+            rtol=rtol,
+            atol=atol * system.atol_scale(),
             pcoeff=0.0,
             icoeff=1.0,
             dtmax=dtmax,
