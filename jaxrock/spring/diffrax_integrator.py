@@ -57,7 +57,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
     solver: str = eqx.field(static=True, default="kvaerno5")
     max_steps: int = eqx.field(static=True, default=20_000)
     # rtol = atol on sampled records (None: rtol, atol as on analytic pulses): the quasi-rigid default
-    # is looser there, where a tighter tolerance costs 1.5x (`SpringModel.default_integrator`)
+    # is looser there, where a tighter tolerance costs 1.4x (`SpringModel.default_integrator`)
     record_tol: float | None = eqx.field(static=True, default=None)
     chunk_steps: int = eqx.field(static=True, default=128)  # a summary's steps per piece in a batch (`DiffraxSpringStepper`)
     root_finder: str = eqx.field(static=True, default="newton")
