@@ -35,7 +35,10 @@ for tanh at θs = 1e-4 α and the bilinear backbone at θy = 1e-5 α.
 by `jacfwd` at tolerance 1e-8 against central differences at h = 1e-2 … 1e-7 and the motion's.
 
 `--part tolerance`: the quasi-rigid default's tolerance by convergence over the study's scenes (Tsit5
-1e-9 … 1e-11 against 1e-12).
+1e-9 … 1e-11 against 1e-12), with the exact pre-yield phase and without.
+
+`--part rest`: the exact pre-yield phase's grid (`jaxrock.spring.rest`): first yields against a finer
+grid on the study's pulses, and on El Centro against the same record sampled finer.
 
 `--part cost`: where the sharp spring's cost comes from: steps and warm ms per scene of the
 quasi-rigid SM on 64 seeded pulses, tanh and bilinear at θs = 1e-4 and 1e-5 α (Tsit5, the default),
@@ -312,10 +315,12 @@ def cost() -> None:
 
 def tolerance() -> None:
     """The quasi-rigid default's tolerance, chosen by convergence over the study's scenes (issue 56,
-    item 3): the default model (bilinear, θy = 1e-5 α) under Tsit5 at 1e-9 … 1e-11 against Tsit5 at
-    1e-12 (whose own error is estimated by |1e-12 − 1e-13|), on the study's 192 pulse scenes (seed 0)
-    and its new ones (seed 1: 56 pulses, 24 El Centro records, apart): max, p99 and median |Δ max θ/α| (verdict
-    changes apart), failures, warm ms per scene."""
+    item 3): the default model (bilinear, θy = 1e-5 α) under Tsit5 at 1e-9 … 1e-11, with its exact
+    pre-yield phase (`jaxrock.spring.rest`, the default) and without, against Tsit5 at 1e-12 with it
+    (whose own error is estimated by |1e-12 − 1e-13|, and its distance to the run without the exact
+    phase printed), on the study's 192 pulse scenes (seed 0) and its new ones (seed 1: 56 pulses, 24
+    El Centro records, apart): max, p99 and median |Δ max θ/α| (verdict changes apart), failures,
+    warm ms per scene."""
     out("# bench_backbone --part tolerance: the quasi-rigid default (bilinear 1e-5) under Tsit5, error against Tsit5 1e-12")
     rng, rng_new = np.random.default_rng(0), np.random.default_rng(1)
     new = sample(56, rng_new, 24)
@@ -323,28 +328,93 @@ def tolerance() -> None:
     records = new["kind"] == "record"
     sets = (("192 pulses (seed 0)", sample(192, rng)), ("56 new pulses (seed 1)", part(~records)),
             ("24 El Centro 1940 NS scaled to PGA/(g tanα) ∈ [1, 4] (seed 1)", part(records)))
-    tsit5 = lambda tol: SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=400_000)
+    tsit5 = lambda tol, rest=True: SpringIntegrator(rtol=tol, atol=tol, solver="tsit5", max_steps=400_000, exact_rest=rest)
     for title, scenes in sets:
         out(f"\n## {title}")
         t = time.perf_counter()
         ref, ref_st, ref_cost = run(scenes, False, "bilinear", 1e-5, tsit5(1e-12), timed=True)
         ref13, _, _ = run(scenes, False, "bilinear", 1e-5, tsit5(1e-13))
-        own = np.abs(ref - ref13)
-        out(f"reference Tsit5 1e-12 ({time.perf_counter() - t:.0f} s, failed {int(np.sum(ref_st != 0))}, {ref_cost * 1e3:.2f} ms/scene); "
-            f"its own error |1e-12 − 1e-13|: max {own.max():.1e}, median {np.median(own):.1e}")
-        out(f"{'Tsit5 tol':>9s} {'max err':>9s} {'p99':>9s} {'median':>9s} {'verdicts':>8s} {'failed':>6s} {'ms/scene':>9s}  largest at")
+        ref_solver, _, _ = run(scenes, False, "bilinear", 1e-5, tsit5(1e-12, rest=False))
+        own, other = np.abs(ref - ref13), np.abs(ref - ref_solver)
+        out(f"reference Tsit5 1e-12 with the exact pre-yield phase ({time.perf_counter() - t:.0f} s, failed {int(np.sum(ref_st != 0))}, "
+            f"{ref_cost * 1e3:.2f} ms/scene); its own error |1e-12 − 1e-13|: max {own.max():.1e}, median {np.median(own):.1e}; "
+            f"|Δ| to Tsit5 1e-12 stepping the pre-yield phase too: max {other.max():.1e}, median {np.median(other):.1e}")
+        out(f"{'Tsit5 tol':>9s} {'pre-yield':>9s} {'max err':>9s} {'p99':>9s} {'median':>9s} {'verdicts':>8s} {'failed':>6s} {'ms/scene':>9s}  largest at")
         for tol in (1e-9, 1e-10, 1e-11):
-            th, st, cost = run(scenes, False, "bilinear", 1e-5, tsit5(tol), timed=True)
-            flip = (th >= 1) != (ref >= 1)
-            err = np.abs(th - ref)[~flip]
-            i_max = np.flatnonzero(~flip)[np.argmax(err)]
-            out(f"{tol:9.0e} {err.max():9.2e} {np.quantile(err, 0.99):9.2e} {np.median(err):9.2e} {int(flip.sum()):8d} "
-                f"{int(np.sum(st != 0)):6d} {cost * 1e3:9.2f}  {describe(scenes, i_max)}")
+            for rest in (False, True):
+                th, st, cost = run(scenes, False, "bilinear", 1e-5, tsit5(tol, rest), timed=True)
+                flip = (th >= 1) != (ref >= 1)
+                err = np.abs(th - ref)[~flip]
+                i_max = np.flatnonzero(~flip)[np.argmax(err)]
+                out(f"{tol:9.0e} {'exact' if rest else 'Tsit5':>9s} {err.max():9.2e} {np.quantile(err, 0.99):9.2e} {np.median(err):9.2e} "
+                    f"{int(flip.sum()):8d} {int(np.sum(st != 0)):6d} {cost * 1e3:9.2f}  {describe(scenes, i_max)}")
+
+
+def rest() -> None:
+    """The exact pre-yield phase's grid (`jaxrock.spring.rest`): on the study's 192 pulses (seed 0)
+    the first yield's time and velocity with `REST_STEPS` = 256 … 2048 steps over the pulse window
+    against 8192, and the phase's warm ms per scene; on 24 El Centro scenes (seed 1) the record's
+    own grid (one step per sample) against the same motion sampled 4 and 16 times finer."""
+    from jaxrock.spring import rest as R
+
+    out("# bench_backbone --part rest: the exact pre-yield phase of the quasi-rigid default (bilinear 1e-5)")
+    scenes = sample(192, np.random.default_rng(0))
+
+    def first_yields(models, exc):
+        f = jax.jit(jax.vmap(lambda m, e: R.rest_phase(m.system(), e, jnp.inf, False)))
+        end = jax.block_until_ready(f(models, exc))
+        t = time.perf_counter()
+        end = jax.block_until_ready(f(models, exc))
+        return end, time.perf_counter() - t
+
+    default = R.REST_STEPS
+    runs = {}
+    for steps in (256, 512, 1024, 2048, 8192):
+        R.REST_STEPS = steps
+        ts, vs, secs, n = [], [], 0.0, []
+        for kind in ("sym", "anti"):
+            models, exc = batch(scenes, np.flatnonzero(scenes["kind"] == kind), False, "bilinear", 1e-5, kind)
+            end, sec = first_yields(models, exc)
+            system = jax.vmap(lambda m: m.system())(models)
+            ts.append(np.asarray(end.t * system.p_r))
+            vs.append(np.asarray(end.y[:, 1] / (system.p_r * system.alpha_r)))
+            secs += sec
+            n.append(np.asarray(end.n_steps))
+        runs[steps] = (np.concatenate(ts), np.concatenate(vs), secs / 192, np.concatenate(n))
+    R.REST_STEPS = default
+    t_ref, v_ref = runs[8192][:2]
+    out("## 192 pulses (seed 0): first yield against 8192 steps over the window (time × p, velocity / (p α))")
+    out(f"{'steps':>6s} {'max |Δt| p':>11s} {'max |Δv|':>9s} {'ms/scene':>9s} {'steps to yield':>15s}")
+    for steps in (256, 512, 1024, 2048):
+        t, v, sec, n = runs[steps]
+        out(f"{steps:6d} {np.max(np.abs(t - t_ref)):11.1e} {np.max(np.abs(v - v_ref)):9.1e} {sec * 1e3:9.3f} {np.mean(n):15.0f}")
+    new = sample(0, np.random.default_rng(1), 24)
+    rec = jr.el_centro()
+    acc, dt = np.asarray(rec.acc), float(rec.dt)
+
+    def finer(k):
+        tu = np.arange((acc.size - 1) * k + 1) * dt / k
+        return jr.Record(np.interp(tu, np.arange(acc.size) * dt, acc), dt / k)
+
+    blocks = jax.vmap(Block.from_slenderness)(jnp.asarray(new["height"]), jnp.asarray(new["tan_alpha"]))
+    models = jax.vmap(lambda b: SpringModel(b, backbone="bilinear", smoothing=1e-5))(blocks)
+    scale = jnp.asarray(new["ar"]) * jr.G * blocks.tan_alpha / float(np.max(np.abs(acc)))
+    system = jax.vmap(lambda m: m.system())(models)
+    ends = {k: first_yields(models, jax.vmap((rec if k == 1 else finer(k)).scaled)(scale)) for k in (1, 4, 16)}
+    out("\n## 24 El Centro scenes (seed 1): one step per sample against the record sampled k times finer (the same motion)")
+    out(f"{'k':>3s} {'max |Δt| p':>11s} {'max |Δv|':>9s} {'ms/scene (k)':>13s}")
+    t1 = np.asarray(ends[1][0].t * system.p_r)
+    v1 = np.asarray(ends[1][0].y[:, 1] / (system.p_r * system.alpha_r))
+    out(f"{1:3d} {'':>11s} {'':>9s} {ends[1][1] / 24 * 1e3:13.3f}")
+    for k in (4, 16):
+        e, sec = ends[k]
+        out(f"{k:3d} {np.max(np.abs(np.asarray(e.t * system.p_r) - t1)):11.1e} "
+            f"{np.max(np.abs(np.asarray(e.y[:, 1] / (system.p_r * system.alpha_r)) - v1)):9.1e} {sec / 24 * 1e3:13.3f}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--part", choices=("study", "gradients", "sawtooth", "cost", "tolerance"), default="study")
+    ap.add_argument("--part", choices=("study", "gradients", "sawtooth", "cost", "tolerance", "rest"), default="study")
     ap.add_argument("--quick", action="store_true", help="a few scenes (smoke run)")
     ap.add_argument("--n-rigid", type=int, default=192, help="quasi-rigid scenes")
     ap.add_argument("--n-flex", type=int, default=48, help="flexible scenes")
@@ -355,7 +425,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
     if args.part != "study":
-        {"gradients": gradients, "sawtooth": sawtooth, "cost": cost, "tolerance": tolerance}[args.part]()
+        {"gradients": gradients, "sawtooth": sawtooth, "cost": cost, "tolerance": tolerance, "rest": rest}[args.part]()
         (HERE / "results" / f"bench_backbone_{args.part}.txt").write_text("\n".join(LINES) + "\n")
         return
     if args.quick:

@@ -77,7 +77,8 @@ def label(integ):
         return "Checked " + label(integ.integrator)
     if isinstance(integ, GeneralizedAlpha):
         return f"generalized-α ρ∞={integ.rho_inf:g} tol {integ.rtol:g}"
-    return f"diffrax {integ.solver} tol {integ.rtol:g}"
+    rest = "" if integ.exact_rest else ", solver through pre-yield"
+    return f"diffrax {integ.solver} tol {integ.rtol:g}{rest}"
 
 
 def err(x, y):
@@ -163,8 +164,9 @@ def main() -> None:
     r_q = scene("quasi-rigid", model, sc, wr, ar, args.n_opensees, rng,
                 SpringIntegrator(rtol=1e-12, atol=1e-12, solver="tsit5", max_steps=400_000),
                 SpringIntegrator(rtol=1e-11, atol=1e-11, solver="kvaerno5", max_steps=200_000), 8,
-                [model.default_integrator(), SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000),
+                [model.default_integrator(), SpringIntegrator(rtol=1e-11, atol=1e-11, solver="tsit5", max_steps=200_000),
                  SpringIntegrator(rtol=1e-9, atol=1e-9, solver="tsit5", max_steps=200_000),
+                 SpringIntegrator(rtol=1e-11, atol=1e-11, solver="tsit5", max_steps=200_000, exact_rest=False),
                  GeneralizedAlpha(1e-6, 1e-6), GeneralizedAlpha(1e-7, 1e-7)], args)
     # flexible
     blk = jr.Block.from_size(50.0, 5.0)

@@ -28,7 +28,8 @@ Time integration, chosen by work–precision (`SpringModel.default_integrator`,
 `jaxrock.spring.generalized_alpha`: the spring solved exactly as a scalar equation in each Newton
 iteration, the rest-state tangent rotated to the rocked configuration, step-size ladder with
 precomputed tangent inverses; forward-mode differentiable); the one-DOF quasi-rigid model:
-explicit Tsit5 (its pre-yield branch is only mildly stiff; reverse-mode differentiable). Either
+its linear pre-yield phase stepped exactly to the first yield (`rest`), then explicit Tsit5 (its
+pre-yield branch is only mildly stiff; reverse-mode differentiable). Either
 model takes either integrator; diffrax's ESDIRK (`SpringIntegrator(solver="kvaerno5")`, full
 Newton stopped on its increment) is the reverse-mode-differentiable choice for flexible columns.
 diffrax runs: integral step-size control with a component-scaled absolute tolerance; overturning
@@ -51,6 +52,8 @@ The package, one module per concept:
 - `base_spring`: the base spring's backbones (`Bilinear`, `Tanh`) and the damper (eq. 18);
 - `system`: the assembled system of one scene (`SpringSystem`, `assemble`);
 - `model`: the model value (`SpringModel`) and its scenes-file kinds;
+- `rest`: the quasi-rigid model's linear pre-yield phase stepped exactly to its first yield (the
+  diffrax integrator's start on a kinked spring);
 - `diffrax_integrator`, `generalized_alpha`: the integrators, and `checked` (`Checked`: a
   companion run estimates the global error, and the status says whether it is within accuracy), each a `SpringSystem` → an
   `AbstractStepper` (`jaxrock.model`), the run recorded by `jaxrock.bookkeeping`.

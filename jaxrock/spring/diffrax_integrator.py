@@ -30,10 +30,11 @@ from jaxtyping import Array
 from .. import _linalg
 from .._validate import JaxrockInputError
 from ..bookkeeping import Record
-from ..excitation import AbstractExcitation, Record as SampledRecord
+from ..excitation import AbstractExcitation
 from .._rootfind import SafeNewton
 from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
+from .rest import rest_grid, rest_phase, rest_states
 from .system import SpringSystem
 
 if TYPE_CHECKING:
@@ -56,9 +57,9 @@ class SpringIntegrator(AbstractSpringIntegrator):
     atol: float = eqx.field(static=True, default=1e-6)
     solver: str = eqx.field(static=True, default="kvaerno5")
     max_steps: int = eqx.field(static=True, default=20_000)
-    # rtol = atol on sampled records (None: rtol, atol as on analytic pulses): the quasi-rigid default
-    # is looser there, where a tighter tolerance costs 1.4x (`SpringModel.default_integrator`)
-    record_tol: float | None = eqx.field(static=True, default=None)
+    # a summary of the quasi-rigid SM on a kinked spring steps its pre-yield phase exactly until it
+    # first yields (`jaxrock.spring.rest`); False: the solver's steps there too
+    exact_rest: bool = eqx.field(static=True, default=True)
     chunk_steps: int = eqx.field(static=True, default=128)  # a summary's steps per piece in a batch (`DiffraxSpringStepper`)
     root_finder: str = eqx.field(static=True, default="newton")
     autodiff: str = eqx.field(static=True, default="reverse")  # or "forward": see model.diffrax_adjoint
@@ -69,8 +70,6 @@ class SpringIntegrator(AbstractSpringIntegrator):
             raise JaxrockInputError(f"solver = {self.solver!r}; valid: {tuple(_SOLVERS)}")
         if not (0 < self.rtol < 1) or not (0 < self.atol < 1):
             raise JaxrockInputError(f"rtol = {self.rtol:g}, atol = {self.atol:g}: both must be in (0, 1)")
-        if self.record_tol is not None and not (0 < self.record_tol < 1):
-            raise JaxrockInputError(f"record_tol = {self.record_tol:g}: must be in (0, 1)")
         if self.root_finder not in ("newton", "chord"):
             raise JaxrockInputError(f"root_finder = {self.root_finder!r}; valid: ('newton', 'chord')")
         if self.max_steps < 16:
@@ -106,21 +105,13 @@ class SpringIntegrator(AbstractSpringIntegrator):
             rf = with_stepsize_controller_tols(diffrax.VeryChord)(linear_solver=_linalg.SequentialLU())
         return _IMPLICIT[self.solver](root_finder=rf)
 
-    def tolerances(self, excitation: AbstractExcitation) -> tuple[float, float]:
-        """(rtol, atol) of the step-size control on `excitation`: `record_tol` on a sampled record
-        where it is given, else the fields."""
-        if self.record_tol is not None and isinstance(excitation, SampledRecord):
-            return self.record_tol, self.record_tol
-        return self.rtol, self.atol
-
     def controller(self, system: SpringSystem, excitation: AbstractExcitation, dtmax=None, t0=0.0, max_steps=None):
         """The step-size controller of a solve from `t0` of at most `max_steps` steps (None: the
-        integrator's): PID at `tolerances(excitation)`, clipped to the excitation's `step_ts` that
-        the solve can reach."""
-        rtol, atol = self.tolerances(excitation)
+        integrator's): PID at (rtol, atol), clipped to the excitation's `step_ts` that the solve
+        can reach."""
         pid = diffrax.PIDController(
-            rtol=rtol,
-            atol=atol * system.atol_scale(),
+            rtol=self.rtol,
+            atol=self.atol * system.atol_scale(),
             pcoeff=0.0,
             icoeff=1.0,
             dtmax=dtmax,
@@ -313,16 +304,48 @@ class DiffraxSpringStepper(AbstractStepper):
             return Schedule()
         return Schedule(passes=(48,) if self.kinked else (4,), smallest_batch=64, lanes=64)
 
+    @property
+    def rests(self) -> bool:
+        """A run of the quasi-rigid SM on a kinked spring (a summary or a history) starts with its
+        exact pre-yield phase (`jaxrock.spring.rest`) on an excitation with an exact grid
+        (`rest_grid`)."""
+        s = self.system
+        return self.integrator.exact_rest and self.kinked and s.n is None and not s.fixed_base and not s.track_energy
+
     def init(self, excitation) -> _Carry:
         system = self.system
         y0 = system.initial_state()
         zero = jnp.zeros((), jnp.int32)
-        return _Carry(phase=zero + _WINDOW, t=jnp.asarray(excitation.t_start, dtype=y0.dtype), y=y0,
-                      t_next=jnp.asarray(jnp.inf, dtype=y0.dtype), steps=zero, n_steps=zero,
-                      rec=Record.start(), status=Status.ok,
-                      e_settle=jnp.zeros((), y0.dtype), branch=system.branch_at(y0[0]) if self.kinked else jnp.zeros((), y0.dtype),
-                      hist=None if self.save is None or not self.kinked else
-                      {f: jnp.full(self.save.ts.shape, jnp.nan, y0.dtype) for f in self.save.fields})
+        c = _Carry(phase=zero + _WINDOW, t=jnp.asarray(excitation.t_start, dtype=y0.dtype), y=y0,
+                   t_next=jnp.asarray(jnp.inf, dtype=y0.dtype), steps=zero, n_steps=zero,
+                   rec=Record.start(), status=Status.ok,
+                   e_settle=jnp.zeros((), y0.dtype), branch=system.branch_at(y0[0]) if self.kinked else jnp.zeros((), y0.dtype),
+                   hist=None if self.save is None or not self.kinked else
+                   {f: jnp.full(self.save.ts.shape, jnp.nan, y0.dtype) for f in self.save.fields})
+        if self.rests and rest_grid(excitation) is not None:
+            c = self._rest(excitation, c)
+        return c
+
+    def _rest(self, excitation, c: _Carry) -> _Carry:
+        """The run after its exact pre-yield phase (`rest_phase`): on the kink of its first yield,
+        in the window (or the free motion, if it yields as the window ends), or at the window's end
+        without one, in the free motion on the pre-yield branch."""
+        system = self.system
+        t_stop = self.model.run_end(system, excitation, self.save, self.t1)
+        end = rest_phase(system, excitation, t_stop, reverse=self.integrator.autodiff == "reverse")
+        inf = jnp.asarray(jnp.inf, c.t.dtype)
+        rec = Record(peak=end.peak, t_uplift=jnp.where(end.yielded, end.t, inf), overturned=jnp.asarray(False), t_overturn=inf)
+        window = end.yielded & (end.t < excitation.t_end)
+        hist = c.hist
+        if hist is not None:  # the save times the phase reached, on its exact motion
+            ts = self.save.ts
+            states = rest_states(system, excitation, ts)
+            vals = jax.vmap(lambda t, y: system.history(t, y, excitation, self.save.fields))(ts, states)
+            hist = {f: jnp.where(ts <= end.t, vals[f], hist[f]) for f in hist}
+        return eqx.tree_at(lambda x: (x.phase, x.t, x.y, x.n_steps, x.rec, x.e_settle, x.branch, x.hist), c,
+                           (jnp.where(window, _WINDOW, _FREE), end.t, end.y, end.n_steps, rec,
+                            jnp.where(window, c.e_settle, system.settle_energy(rec.peak)), jnp.where(end.yielded, jnp.sign(end.y[0]), 0.0), hist),
+                           is_leaf=lambda x: x is None)
 
     def step(self, excitation, c: _Carry) -> _Carry:
         return self._piece(excitation, c, self.integrator.chunk_steps)

@@ -113,18 +113,17 @@ class SpringModel(AbstractModel):
         measured errors and costs, and the alternatives, are in the README, "Numerics and
         performance"):
 
-        - quasi-rigid → explicit Tsit5 at rtol = atol = 1e-11 on pulses and 1e-10 on sampled
-          records (`SpringIntegrator.record_tol`), reverse-mode differentiable (which the
-          calibration of c̄ needs). Chosen by `python benchmarks/bench_backbone.py --part
-          tolerance` (the default bilinear spring, error in max θ/α against Tsit5 1e-12 over the
-          backbone study's scenes; results/bench_backbone_tolerance.txt): on 248 pulses 1e-11
-          leaves ≤ 2e-7 where 1e-10 left 4.5e-6, at the same cost within the timing noise (the
-          steps go to the stiff pre-yield spring's ringing, not to the tolerance); on 24 El Centro
-          scenes 1e-10 leaves 1.6e-4 (median 1.4e-7) and 1e-11 2.2e-5 at 1.4x the cost — a record's
-          tolerance is 1e-10 there, pass `record_tol=1e-11` for more. `GeneralizedAlpha(1e-6, 1e-6)`
-          is cheaper at ~1e-3 error in θ/α: for pulse spectra where that suffices, not for records,
-          whose response hangs on resolving the block's ringing on the stiff pre-yield spring before
-          uplift;
+        - quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10 after the exact pre-yield phase
+          (`jaxrock.spring.rest`: until the block first yields, its linear equation is stepped
+          exactly on a fixed grid), reverse-mode differentiable (which the calibration of c̄
+          needs). Chosen by `python benchmarks/bench_backbone.py --part tolerance` (the default
+          bilinear spring, error in max θ/α against Tsit5 1e-12 over the backbone study's scenes;
+          results/bench_backbone_tolerance.txt): on 248 pulses it leaves ≤ 4e-8 at 1.7–2.2 ms/scene,
+          where Tsit5 through the pre-yield phase left 1.7e-7 at 1e-11 and 5–6 ms (its steps went to
+          the stiff pre-yield spring's ringing); 1e-11 leaves ≤ 3e-9 at 1.3x the cost. On 24 El
+          Centro scenes 2.2e-5 (median 6.5e-10; 1e-11: 1.6e-6 at 1.3x the cost; pass
+          `SpringIntegrator(1e-11, 1e-11, solver="tsit5", max_steps=200_000)` for it).
+          `GeneralizedAlpha(1e-6, 1e-6)` is ~1e-3 off in θ/α;
         - flexible → `Checked(GeneralizedAlpha(1e-5, 1e-5))`, ρ∞ = 0.9, accuracy 1e-2 in max θ/α′:
           its status is `inaccurate` where a companion run at 1e-4 differs by more (a stiff spring
           or column, where the local tolerance does not bound the global error: `jaxrock.spring.
@@ -137,7 +136,7 @@ class SpringModel(AbstractModel):
         if self.column is None:
             # 20,000 steps (the class default) ended the 40-s packaged records B-ELC000 and A-TIN000
             # (dt 0.005 s) in max_steps at every factor, the block at rest on its ringing spring
-            return SpringIntegrator(rtol=1e-11, atol=1e-11, record_tol=1e-10, solver="tsit5", max_steps=200_000, autodiff=autodiff)
+            return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000, autodiff=autodiff)
         return Checked(GeneralizedAlpha(rtol=1e-5, atol=1e-5))
 
     @property
