@@ -313,6 +313,9 @@ def spring_scenes():
     return np.array([r[:5] + [cb(r[4])] for r in rows])
 
 
+# 236 s alone on 2 cores (reverse mode through the exact pre-yield phase's checkpointed loop and the
+# pieces, for the default and the converged run): beyond the 300-s per-test limit beside another worker
+@pytest.mark.timeout(900)
 def test_spring_gradients_match_central_differences():
     """The quasi-rigid SM, reverse mode at its default integrator (Tsit5 1e-10 after the exact
     pre-yield phase), all six parameters (c̄ in place of η), three rocking scenes (one on an extended

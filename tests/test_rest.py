@@ -54,6 +54,7 @@ def test_a_slow_pulse_yields_at_the_static_threshold():
     assert not bool(below.yielded) and float(below.peak) < theta_y
 
 
+@pytest.mark.slow  # two compiles of Tsit5 1e-12 runs; the default run keeps test_spring's tolerance test (the same comparison on two scenes)
 def test_exact_phase_agrees_with_the_solver_through_it():
     """The summary with the exact pre-yield phase (the default) against the same run whose solver
     steps the phase too, both at Tsit5 1e-12: max θ/α and the uplift time agree to the solver's own
@@ -68,6 +69,7 @@ def test_exact_phase_agrees_with_the_solver_through_it():
         assert abs(float(a.t_uplift) - float(b.t_uplift)) * p < 2e-6, sc
 
 
+@pytest.mark.slow  # three grids, a compile each; the default run keeps the static threshold and the derivatives
 def test_pulse_grid_converges(monkeypatch):
     """The grid over the pulse window (`REST_STEPS`) converges at the h⁴ of the interpolated pulse:
     the first yield's time and velocity at the default against 4 times finer, within 1e-6/p and
@@ -89,6 +91,7 @@ def test_pulse_grid_converges(monkeypatch):
     assert np.max(np.abs(coarse - fine)) > np.max(np.abs(d - fine))
 
 
+@pytest.mark.slow  # a 40-s record at two samplings; the default run keeps the pulses' exact phase
 def test_a_records_grid_is_the_record():
     """On a record the ground acceleration is linear between samples, so one step per sample is
     exact: the same record sampled 4 times finer (the same motion) gives the same first yield to
