@@ -57,8 +57,8 @@ class SpringIntegrator(AbstractSpringIntegrator):
     atol: float = eqx.field(static=True, default=1e-6)
     solver: str = eqx.field(static=True, default="kvaerno5")
     max_steps: int = eqx.field(static=True, default=20_000)
-    # a summary of the quasi-rigid SM on a kinked spring steps its pre-yield phase exactly until it
-    # first yields (`jaxrock.spring.rest`); False: the solver's steps there too
+    # a run (summary or history) of the quasi-rigid SM on a kinked spring steps its pre-yield phase
+    # exactly until it first yields (`jaxrock.spring.rest`); False: the solver's steps there too
     exact_rest: bool = eqx.field(static=True, default=True)
     chunk_steps: int = eqx.field(static=True, default=128)  # a summary's steps per piece in a batch (`DiffraxSpringStepper`)
     root_finder: str = eqx.field(static=True, default="newton")

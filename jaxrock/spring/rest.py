@@ -14,9 +14,9 @@ Here the equation is stepped exactly on a fixed grid: on each step of length h t
 acceleration is its cubic Hermite interpolant (values and slopes at both ends; on a sampled record
 its samples' linear interpolant, the record itself) and the state is propagated by the exponential
 of the 6×6 augmented matrix (Van Loan 1978), computed once per scene. The first yield is the
-first step whose end, or whose midpoint, lies beyond θy; it is located on that step's exact
-solution by safeguarded Newton, so that the uplift time and state are smooth functions of the
-parameters (their derivatives the motion's). The diffrax integrator takes over there, on the
+first sub-step (`SUB_PULSE`, `SUB_RECORD` per step) whose cubic Hermite interpolant reaches θy; it
+is located on that sub-step's exact solution by Newton from the interpolant's crossing, so that the
+uplift time and state are smooth functions of the parameters (their derivatives the motion's). The diffrax integrator takes over there, on the
 yielded branch (`jaxrock.spring.diffrax_integrator`).
 
 On a pulse the grid has `REST_STEPS` steps over the pulse window (the error of the interpolated
@@ -136,7 +136,7 @@ class RestEnd(eqx.Module):
     t: Float[Array, ""]
     y: Float[Array, " 2"]
     yielded: Array
-    peak: Float[Array, ""]  # max |θ| on the way (step ends and midpoints)
+    peak: Float[Array, ""]  # max |θ| on the way (the sub-steps' interpolants); θy once yielded
     n_steps: Array
 
 
