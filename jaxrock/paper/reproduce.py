@@ -119,6 +119,12 @@ def reproduce(out="out/reproduce", *, quick: bool = False, only=None, progress: 
                 t0 = time.perf_counter()
                 fs = run_step(step, out, quick)
                 secs = time.perf_counter() - t0
+                # the steps share few programs: free each step's compiled ones (the full run, all
+                # of them kept in one process, ended in 'LLVM compilation error: Cannot allocate
+                # memory' and a segmentation fault at its last step, which passes alone)
+                import jax
+
+                jax.clear_caches()
                 text = json.dumps({"mode": mode, "version": _version(), "seconds": secs, "findings": [f.row() for f in fs]},
                                   ensure_ascii=False, indent=1)
                 write_atomically(kept_path, lambda tmp, text=text: Path(tmp).write_text(text, encoding="utf-8"))
