@@ -114,6 +114,18 @@ MOVED_TO_SLOW = {
     "tests/test_boundary.py::test_find_boundary_agrees_with_bisection": "19 s; find_boundary: notebook 03 (CI)",
     "tests/test_cli_guards.py::test_batch_resume_refuses_results_of_another_record_or_version": "14 s; refused kept work: "
     "test_spectra unreadable_checkpoint_is_refused_in_one_line, checkpoint_of_other_physics",
+    # sixth round (README command 2 in a bare clone: 794 s after the exact pre-yield phase; call seconds)
+    "tests/test_batch.py::test_a_batch_is_dealt_over_a_cpus_devices_with_one_devices_results": "87 s; several devices: "
+    "test_sweep sharded_over_four_host_devices (slow too), test_batch accelerators_wider_lanes",
+    "tests/test_batch.py::test_gathering_on_the_device_gives_the_bits_of_gathering_on_the_host[spring]": "78 s; [rigid] stays",
+    "tests/test_backbone.py::test_peak_derivative_through_kinks_in_both_modes[reverse]": "73 s; [forward] stays, and "
+    "the_kink_is_an_event_so_derivatives_through_it_match_central_differences",
+    "tests/test_sensitivity.py::test_a_batch_reports_each_runs_sensitivity_as_simulate_does": "61 s; batch sensitivity: "
+    "test_batch batch_sensitivity_writes_each_rows_tangent_and_doubt",
+    "tests/test_record_runs.py::test_spring_pieces_step_on_the_same_samples_as_one_whole_grid": "55 s; records on the "
+    "spring model: paced_runs_agree_with_the_event_loop_and_scipy, test_spring the_quasi_rigid_default_tolerance_converges",
+    "tests/test_sweep.py::test_a_sweep_with_sensitivity_is_the_spectrum_with_it_and_keeps_its_own_store": "38 s; batch "
+    "sensitivity: test_batch batch_sensitivity_writes_each_rows_tangent_and_doubt",
 }
 
 
