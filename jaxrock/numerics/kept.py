@@ -52,6 +52,7 @@ def run_parts(parts, run, folder: Path, key: dict, *, name, desc: str, progress:
     in `folder/<name(part)>.json` with `key` (mode and version): a part kept under the same key is
     read back, not run (a damaged file is run again: `read_kept`); a signal stops the run after the
     part in progress (`jaxrock.interrupt.stop_point`), with it kept."""
+    import jax
     from tqdm.auto import tqdm
 
     from ..interrupt import stop_point
@@ -66,6 +67,10 @@ def run_parts(parts, run, folder: Path, key: dict, *, name, desc: str, progress:
             rows.extend(kept)
             continue
         new = run(part)
+        # free the part's compiled programs: kept in one process, every one adds memory maps, and
+        # the full `jaxrock work-precision` ended its sixth panel in 'LLVM compilation error: Cannot
+        # allocate memory' (vm.max_map_count 65530), as `jaxrock reproduce` had (`jaxrock.paper.reproduce`)
+        jax.clear_caches()
         write_atomically(path, lambda tmp: Path(tmp).write_text(json.dumps({"key": key, "rows": new}), encoding="utf-8"))
         rows.extend(new)
         stop_point()
