@@ -23,16 +23,32 @@ from jaxtyping import Array, Bool, Float
 from .results import OUTPUTS, SUMMARY, Solution, Status
 
 
-def _hermite(s, a0, a1, w0, w1):
+def hermite(s, a0, a1, w0, w1):
     """The cubic Hermite interpolant at s ∈ [0, 1] of a step from (a0, w0) to (a1, w1), with the
     slopes w already multiplied by the step length."""
     s2, s3 = s * s, s * s * s
     return (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * w0 + (-2 * s3 + 3 * s2) * a1 + (s3 - s2) * w1
 
 
-def _hermite_slope(a0, a1, w0, w1):
+def hermite_slope(a0, a1, w0, w1):
     """(A, B, C) of the interpolant's derivative d/ds = A s² + B s + C."""
     return 6 * a0 + 3 * w0 - 6 * a1 + 3 * w1, -6 * a0 - 4 * w0 + 6 * a1 - 2 * w1, w0
+
+
+def hermite_turns(a0, a1, w0, w1):
+    """The interpolant's turning points: the roots s of its derivative A s² + B s + C, three
+    candidates (the stable pair of a quadratic, the one root of a degenerate A = 0), −1 where none."""
+    A, B, C = hermite_slope(a0, a1, w0, w1)
+    disc = B**2 - 4 * A * C
+    sq = jnp.sqrt(jnp.where(disc > 0, disc, 1.0))
+    qq = -0.5 * (B + jnp.where(B >= 0, 1.0, -1.0) * sq)
+    qok = (jnp.abs(qq) > 0) & (disc > 0)
+    qs = jnp.where(qok, qq, 1.0)
+    r1 = jnp.where(qok & (jnp.abs(A) > 0), qq / jnp.where(jnp.abs(A) > 0, A, 1.0), -1.0)
+    r2 = jnp.where(qok, C / qs, -1.0)
+    # degenerate quadratic (A = 0): single root −C/B
+    r3 = jnp.where((jnp.abs(A) == 0) & (jnp.abs(B) > 0), -C / jnp.where(jnp.abs(B) > 0, B, 1.0), -1.0)
+    return r1, r2, r3
 
 
 def step_peaks(ts, th, om):
@@ -45,21 +61,10 @@ def step_peaks(ts, th, om):
     a0, a1 = safe(th[:-1], 0.0), safe(th[1:], 0.0)
     w0, w1 = safe(om[:-1], 0.0), safe(om[1:], 0.0)
     dt = t1s - t0s
-    A, B, C = _hermite_slope(a0, a1, dt * w0, dt * w1)
-    disc = B**2 - 4 * A * C
-    sq = jnp.sqrt(jnp.where(disc > 0, disc, 1.0))
-    qq = -0.5 * (B + jnp.where(B >= 0, 1.0, -1.0) * sq)
-    qok = (jnp.abs(qq) > 0) & (disc > 0)
-    qs = jnp.where(qok, qq, 1.0)
-    r1 = jnp.where(qok & (jnp.abs(A) > 0), qq / jnp.where(jnp.abs(A) > 0, A, 1.0), -1.0)
-    r2 = jnp.where(qok, C / qs, -1.0)
-    # degenerate quadratic (A = 0): single root −C/B
-    r3 = jnp.where((jnp.abs(A) == 0) & (jnp.abs(B) > 0), -C / jnp.where(jnp.abs(B) > 0, B, 1.0), -1.0)
-
     best = jnp.maximum(jnp.abs(a0), jnp.abs(a1))
-    for r in (r1, r2, r3):
+    for r in hermite_turns(a0, a1, dt * w0, dt * w1):
         inside = (r > 0) & (r < 1)
-        best = jnp.maximum(best, jnp.where(inside, jnp.abs(_hermite(jnp.where(inside, r, 0.5), a0, a1, dt * w0, dt * w1)), 0.0))
+        best = jnp.maximum(best, jnp.where(inside, jnp.abs(hermite(jnp.where(inside, r, 0.5), a0, a1, dt * w0, dt * w1)), 0.0))
     return jnp.where(valid, best, 0.0)
 
 
@@ -74,9 +79,9 @@ def hermite_crossing(t0, t1, th0, th1, om0, om1, level, newton: int = 4):
     a0, a1, w0, w1 = sgn * th0, sgn * th1, sgn * om0 * dt, sgn * om1 * dt
     rise = jnp.where(a1 > a0, a1 - a0, 1.0)
     s = jnp.clip((level - a0) / rise, 0.0, 1.0)
-    A, B, C = _hermite_slope(a0, a1, w0, w1)
+    A, B, C = hermite_slope(a0, a1, w0, w1)
     for _ in range(newton):
-        f = _hermite(s, a0, a1, w0, w1) - level
+        f = hermite(s, a0, a1, w0, w1) - level
         df = (A * s + B) * s + C
         s = jnp.clip(s - f / jnp.where(df > 0, df, 1.0) * (df > 0), 0.0, 1.0)
     return t0 + s * dt

@@ -205,7 +205,26 @@ def diffrax_adjoint(autodiff: str, checkpoints: int | None = None) -> diffrax.Ab
     return diffrax.ForwardMode() if autodiff == "forward" else diffrax.RecursiveCheckpointAdjoint(checkpoints)
 
 
-class FirstStepController(diffrax.AbstractAdaptiveStepSizeController):
+class WrappedController(diffrax.AbstractAdaptiveStepSizeController):
+    """An adaptive step-size controller around another (`controller`), whose tolerances and norm
+    are the wrapped one's: `FirstStepController`, `jaxrock.spring.diffrax_integrator.KinkGuard`."""
+
+    controller: eqx.AbstractVar[diffrax.AbstractAdaptiveStepSizeController]
+
+    @property
+    def rtol(self):
+        return self.controller.rtol
+
+    @property
+    def atol(self):
+        return self.controller.atol
+
+    @property
+    def norm(self):  # pyright: ignore[reportIncompatibleMethodOverride]
+        return self.controller.norm
+
+
+class FirstStepController(WrappedController):
     """An adaptive step-size controller that carries the solve's first step: pass it to
     `diffrax.diffeqsolve` with `dt0=None`.
 
@@ -225,18 +244,6 @@ class FirstStepController(diffrax.AbstractAdaptiveStepSizeController):
     controller: diffrax.AbstractAdaptiveStepSizeController
     dt0: Float[Array, ""]
     t_next: Float[Array, ""] | None = None  # the first step's end for a solve that goes on (+inf: start afresh from dt0)
-
-    @property
-    def rtol(self):
-        return self.controller.rtol
-
-    @property
-    def atol(self):
-        return self.controller.atol
-
-    @property
-    def norm(self):  # pyright: ignore[reportIncompatibleMethodOverride]
-        return self.controller.norm
 
     def wrap(self, direction):
         return FirstStepController(self.controller.wrap(direction), self.dt0 * direction, self.t_next)

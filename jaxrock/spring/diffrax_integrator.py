@@ -29,10 +29,10 @@ from jaxtyping import Array
 
 from .. import _linalg
 from .._validate import JaxrockInputError
-from ..bookkeeping import Record
+from ..bookkeeping import Record, hermite, hermite_turns
 from ..excitation import AbstractExcitation
 from .._rootfind import SafeNewton
-from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
+from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, WrappedController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
 from .rest import rest_grid, rest_phase, rest_states
 from .system import SpringSystem
@@ -226,13 +226,17 @@ def kink_event(branch):
     base rotation lies inside `branch`, plus the hysteresis; it falls through 0 past the kink."""
 
     def cond(t, y, args, **kw):
-        system = args[0]
-        return system.kink_distance(y[0], branch) + KINK_HYSTERESIS * system.theta_s
+        return kink_condition(args[0], y[0], branch)
 
     return cond
 
 
-class KinkGuard(diffrax.AbstractAdaptiveStepSizeController):
+def kink_condition(system: SpringSystem, theta, branch):
+    """How far θ lies inside `branch`, plus the hysteresis (`kink_event`): < 0 past the kink."""
+    return system.kink_distance(theta, branch) + KINK_HYSTERESIS * system.theta_s
+
+
+class KinkGuard(WrappedController):
     """A step-size controller that rejects a step which leaves its branch and comes back within it.
 
     A kinked backbone's solve runs on one branch (`SpringSystem.on_branch`: the moment continued
@@ -247,18 +251,6 @@ class KinkGuard(diffrax.AbstractAdaptiveStepSizeController):
 
     controller: diffrax.AbstractAdaptiveStepSizeController
 
-    @property
-    def rtol(self):
-        return self.controller.rtol
-
-    @property
-    def atol(self):
-        return self.controller.atol
-
-    @property
-    def norm(self):  # pyright: ignore[reportIncompatibleMethodOverride]
-        return self.controller.norm
-
     def wrap(self, direction):
         return KinkGuard(self.controller.wrap(direction))
 
@@ -272,26 +264,19 @@ class KinkGuard(diffrax.AbstractAdaptiveStepSizeController):
         if system.branch is None:  # the whole backbone (no branch to leave)
             return keep, next_t0, next_t1, jump, state, result
         s_x, d_x = _excursion(system, t1 - t0, y0, y1_candidate)
-        away = keep & (d_x < 0) & (system.kink_distance(y1_candidate[0], system.branch) + KINK_HYSTERESIS * system.theta_s >= 0)
+        away = keep & (d_x < 0) & (kink_condition(system, y1_candidate[0], system.branch) >= 0)
         retry = jax.lax.stop_gradient(t0 + s_x * (t1 - t0))
         return (keep & ~away, jnp.where(away, t0, next_t0), jnp.where(away, retry, next_t1), jump & ~away, state, result)
 
 
 def _excursion(system: SpringSystem, dt, y0, y1):
     """(s, d): the deepest point s ∈ [0, 1] of a step (as a fraction of it) on the cubic Hermite
-    interpolant of θ through its ends' θ and θ̇, and the kink event's condition there (`kink_event`;
-    < 0: past the kink). θ′(s) = A s² + B s + C; its roots in [0, 1] are the candidates."""
+    interpolant of θ through its ends' θ and θ̇ (its turning points, `bookkeeping.hermite_turns`;
+    none: the start), and the kink event's condition there (`kink_event`; < 0: past the kink)."""
     n = system.ndof
-    th0, th1, h0, h1 = y0[0], y1[0], dt * y0[n], dt * y1[n]
-    A = 6 * (th0 - th1) + 3 * (h0 + h1)
-    B = 6 * (th1 - th0) - 4 * h0 - 2 * h1
-    C = h0
-    root = jnp.sqrt(jnp.maximum(B * B - 4 * A * C, 0.0))
-    q = -0.5 * (B + jnp.where(B >= 0, root, -root))  # the stable pair of roots q/A, C/q
-    safe = lambda num, den: jnp.where(den != 0, num / jnp.where(den != 0, den, 1.0), 0.0)
-    ss = jnp.clip(jnp.stack([safe(q, A), safe(C, q)]), 0.0, 1.0)
-    theta = (2 * ss**3 - 3 * ss**2 + 1) * th0 + (ss**3 - 2 * ss**2 + ss) * h0 + (3 * ss**2 - 2 * ss**3) * th1 + (ss**3 - ss**2) * h1
-    d = system.kink_distance(theta, system.branch) + KINK_HYSTERESIS * system.theta_s
+    a0, a1, w0, w1 = y0[0], y1[0], dt * y0[n], dt * y1[n]
+    ss = jnp.clip(jnp.stack(hermite_turns(a0, a1, w0, w1)), 0.0, 1.0)
+    d = kink_condition(system, hermite(ss, a0, a1, w0, w1), system.branch)
     i = jnp.argmin(d)
     return ss[i], d[i]
 
