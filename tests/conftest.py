@@ -126,6 +126,16 @@ MOVED_TO_SLOW = {
     "spring model: paced_runs_agree_with_the_event_loop_and_scipy, test_spring the_quasi_rigid_default_tolerance_converges",
     "tests/test_sweep.py::test_a_sweep_with_sensitivity_is_the_spectrum_with_it_and_keeps_its_own_store": "38 s; batch "
     "sensitivity: test_batch batch_sensitivity_writes_each_rows_tangent_and_doubt",
+    # seventh round (README command 2 in a bare clone: 879 s, with other work on the 2 cores; call seconds)
+    "tests/test_record_runs.py::test_paced_runs_agree_with_the_event_loop_and_scipy[synthetic2]": "67 s; [synthetic1] stays",
+    "tests/test_checked.py::test_a_checked_batch_runs_its_run_and_companion_apart_with_each_cells_verdict": "65 s; Checked: "
+    "the_companion_starts_as_the_run_does_and_leaves_out_only_the_crossing_limit",
+    "tests/test_backbone.py::test_peak_derivative_through_kinks_in_both_modes[forward]": "47 s; derivatives through the kinks: "
+    "the_kink_is_an_event_so_derivatives_through_it_match_central_differences",
+    "tests/test_hostile.py::test_reverse_mode_through_generalized_alpha_says_which_setting_can": "38 s (compiling the reverse "
+    "program); reverse mode refused in one line: the slow set",
+    "tests/test_sensitivity.py::test_the_sensitivity_is_the_slope_of_the_motion_in_the_scale[3.0-5.0-AntisymmetricRickerPulse]":
+    "34 s; [2.0-3.0-RickerPulse] stays",
 }
 
 
