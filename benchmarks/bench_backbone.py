@@ -34,6 +34,11 @@ for tanh at θs = 1e-4 α and the bilinear backbone at θy = 1e-5 α.
 `--part sawtooth`: why generalized-α's derivatives through the bilinear's kinks are off: d max θ/d ln a_p
 by `jacfwd` at tolerance 1e-8 against central differences at h = 1e-2 … 1e-7 and the motion's.
 
+`--part transit`: where generalized-α's derivative leaves the motion's: the history θ(t) of the first
+6 gradient scenes (quasi-rigid, generalized-α 1e-8) differentiated along ln a_p by `jacfwd`, against
+the motion's (Tsit5 1e-11, forward mode, stopping on the kinks) and generalized-α's own central
+difference (h = 1e-4), before and after the first band transit (the first impact), on both backbones.
+
 `--part tolerance`: the quasi-rigid default's tolerance by convergence over the study's scenes (Tsit5
 1e-9 … 1e-11 against 1e-12), with the exact pre-yield phase and without.
 
@@ -45,7 +50,7 @@ quasi-rigid SM on 64 seeded pulses, tanh and bilinear at θs = 1e-4 and 1e-5 α 
 and Kvaerno5 on the bilinear.
 
 The printed tables are also written to benchmarks/results/bench_backbone.txt (and
-bench_backbone_gradients.txt, bench_backbone_sawtooth.txt, bench_backbone_cost.txt).
+bench_backbone_gradients.txt, bench_backbone_sawtooth.txt, bench_backbone_transit.txt, bench_backbone_cost.txt).
 """
 
 from __future__ import annotations
@@ -291,6 +296,57 @@ def sawtooth() -> None:
                 + " ".join(f"{c:10.5f}" for c in cds))
 
 
+def transit() -> None:
+    """Where generalized-α's derivative leaves the motion's (issue 56, item 1): d θ(t)/d ln a_p on
+    the history, before and after the first crossing of the pre-yield band (the first impact).
+    Errors are relative to the largest |d θ/d ln a_p| of the motion in the same window."""
+    out("# bench_backbone --part transit: quasi-rigid, generalized-α 1e-8, d θ(t)/d ln a_p against the motion's (Tsit5 1e-11)")
+    out("# window: from the start to the first band transit, and from there to the pulse's end + 3 s; error relative to the")
+    out("# motion's largest |derivative| in the window; cd: generalized-α's own central difference (h = 1e-4)")
+    out(f"{'backbone':9s} {'θs/α':>6s} {'scene':>5s} {'transit s':>9s}  {'jacfwd before':>13s} {'jacfwd after':>12s}  "
+        f"{'cd before':>9s} {'cd after':>9s}")
+    sc = gradient_scenes()
+    h = 1e-4
+    for backbone, smoothing in (("bilinear", 1e-5), ("tanh", 1e-4)):
+        for i in range(6):
+            h2, ta, wr = sc[1][i], sc[2][i], sc[3][i]
+            blk = Block.from_slenderness(h2, ta)
+            ex0 = RickerPulse(*jr.pulse_of_ratios(blk, sc[0][i], wr))
+            ts = jnp.linspace(float(ex0.t_start), float(ex0.t_end) + 3.0, 400)
+
+            def history(integrator):
+                def run(log_ar):
+                    ex = RickerPulse(*jr.pulse_of_ratios(blk, jnp.exp(log_ar), wr))
+                    s = jr.simulate(SpringModel(blk, None, backbone=backbone, smoothing=smoothing), ex,
+                                    integrator=integrator, save=jr.Save(ts))
+                    return s.history["theta"] / blk.alpha
+                return run
+
+            ga = history(GeneralizedAlpha(1e-8, 1e-8))
+            ref = history(SpringIntegrator(1e-11, 1e-11, "tsit5", max_steps=400_000, autodiff="forward"))
+            x = jnp.log(sc[0][i])
+            th = np.asarray(jax.jit(ref)(x))
+            d_ga, d_ref = np.asarray(jax.jit(jax.jacfwd(ga))(x)), np.asarray(jax.jit(jax.jacfwd(ref))(x))
+            f = jax.jit(ga)
+            cd = (np.asarray(f(x + h)) - np.asarray(f(x - h))) / (2 * h)
+            band = float(SpringModel(blk, None, backbone=backbone, smoothing=smoothing).smoothing) * (3 if backbone == "tanh" else 1)
+            up = np.flatnonzero(np.abs(th) > 2 * band)
+            sign = np.sign(th)
+            cross = [k for k in (up if up.size else []) if k > up[0] and sign[k] != sign[up[0]] and sign[k] != 0]
+            if not cross:
+                out(f"{backbone:9s} {smoothing:6.0e} {i:5d} {'—':>9s}  (no band transit: overturns or stays)")
+                continue
+            k = cross[0]
+            cells = []
+            for d in (d_ga, cd):
+                for lo, hi in ((0, k), (k, len(ts))):
+                    both = np.isfinite(d[lo:hi]) & np.isfinite(d_ref[lo:hi])  # an overturned run's history ends
+                    scale = max(np.max(np.abs(d_ref[lo:hi][both])), 1e-12)
+                    cells.append(np.max(np.abs(d[lo:hi] - d_ref[lo:hi])[both]) / scale)
+            out(f"{backbone:9s} {smoothing:6.0e} {i:5d} {float(ts[k]):9.3f}  {cells[0]:13.1e} {cells[1]:12.1e}  "
+                f"{cells[2]:9.1e} {cells[3]:9.1e}")
+
+
 def cost() -> None:
     """Where the sharp spring's cost comes from: steps and warm time per scene of the quasi-rigid SM
     on 64 seeded pulses (seed 5, batches of 32 by pulse shape) for each backbone at θs = 1e-4 and
@@ -414,7 +470,7 @@ def rest() -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--part", choices=("study", "gradients", "sawtooth", "cost", "tolerance", "rest"), default="study")
+    ap.add_argument("--part", choices=("study", "gradients", "sawtooth", "transit", "cost", "tolerance", "rest"), default="study")
     ap.add_argument("--quick", action="store_true", help="a few scenes (smoke run)")
     ap.add_argument("--n-rigid", type=int, default=192, help="quasi-rigid scenes")
     ap.add_argument("--n-flex", type=int, default=48, help="flexible scenes")
@@ -425,7 +481,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
     if args.part != "study":
-        {"gradients": gradients, "sawtooth": sawtooth, "cost": cost, "tolerance": tolerance, "rest": rest}[args.part]()
+        {"gradients": gradients, "sawtooth": sawtooth, "transit": transit, "cost": cost, "tolerance": tolerance, "rest": rest}[args.part]()
         (HERE / "results" / f"bench_backbone_{args.part}.txt").write_text("\n".join(LINES) + "\n")
         return
     if args.quick:

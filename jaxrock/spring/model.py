@@ -48,7 +48,10 @@ class SpringModel(AbstractModel):
       leave, over `benchmarks/bench_backbone.py`'s scenes: the quasi-rigid bilinear at 1e-5 within
       1e-3 of α of the rigid-plastic limit wherever that limit is settled, its derivatives the
       motion's (the diffrax integrator stops on the kinks); the flexible tanh at 1e-4 up to 3.9e-2
-      of α (median 7.6e-4) — pass `backbone="bilinear"` for values within 1e-3 there;
+      of α (median 7.6e-4). For values within 1e-3 there pass `backbone="bilinear"` *and* a tight
+      integrator, `GeneralizedAlpha(1e-7, 1e-7)` (the study's setting: 8.3e-4); under the default
+      `Checked(GeneralizedAlpha(1e-5, 1e-5))` the bilinear's total error reaches 6.9e-3, and
+      generalized-α's forward derivatives through its kinks are off (README, "Numerics");
     - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
       at the first fixed-base period of the discretised column *with its added rotational masses*
       (`first_period`; they lengthen it a little, `tests/test_spring.py`);
