@@ -68,6 +68,7 @@ import numpy as np
 
 import jaxrock as jr
 from jaxrock import AntisymmetricRickerPulse, Block, Column, GeneralizedAlpha, RickerPulse, SpringIntegrator, SpringModel
+from jaxrock.spring.base_spring import as_backbone
 
 HERE = Path(__file__).resolve().parent
 LINES: list[str] = []
@@ -329,10 +330,10 @@ def transit() -> None:
             d_ga, d_ref = np.asarray(jax.jit(jax.jacfwd(ga))(x)), np.asarray(jax.jit(jax.jacfwd(ref))(x))
             f = jax.jit(ga)
             cd = (np.asarray(f(x + h)) - np.asarray(f(x - h))) / (2 * h)
-            band = float(SpringModel(blk, None, backbone=backbone, smoothing=smoothing).smoothing) * (3 if backbone == "tanh" else 1)
+            band = as_backbone(backbone).band * smoothing  # the pre-yield band, in θ/α (≈ θ/α′)
             up = np.flatnonzero(np.abs(th) > 2 * band)
             sign = np.sign(th)
-            cross = [k for k in (up if up.size else []) if k > up[0] and sign[k] != sign[up[0]] and sign[k] != 0]
+            cross = [k for k in up if sign[k] != sign[up[0]] and sign[k] != 0]
             if not cross:
                 out(f"{backbone:9s} {smoothing:6.0e} {i:5d} {'—':>9s}  (no band transit: overturns or stays)")
                 continue
