@@ -26,15 +26,16 @@ For each backbone (bilinear, tanh) and θs/α ∈ {1e-3 … 3e-6}:
 2h 5–30 m, tanα 0.12–0.3, ω_p/p 2–8), d max|θ|/α, d t_uplift and d t_overturn / d ln a_p in both
 autodiff modes against central differences (h = 1e-4 in ln a_p): quasi-rigid with Tsit5 1e-10 (the
 default) and generalized-α 1e-6 (forward), flexible with generalized-α 1e-6 on its default (tanh
-θs = 1e-4 α) and on the bilinear backbone at θy = 1e-5 α (the candidate default; generalized-α steps
-over its kinks); and
+θs = 1e-4 α) and on the bilinear backbone at θy = 1e-5 α (the candidate default; generalized-α ends
+its steps on its kinks); and
 calibration's reverse-mode ∂r_eq²/∂c̄ (Tsit5 1e-10 and 1e-12; tanα = 0.2, c̄ = 0.08, θ₀ = 0.7 α)
 for tanh at θs = 1e-4 α and the bilinear backbone at θy = 1e-5 α.
 
-`--part sawtooth`: why generalized-α's derivatives through the bilinear's kinks are off: d max θ/d ln a_p
-by `jacfwd` at tolerance 1e-8 against central differences at h = 1e-2 … 1e-7 and the motion's.
+`--part sawtooth`: whether generalized-α's derivatives through the bilinear's kinks are the motion's:
+d max θ/d ln a_p by `jacfwd` at tolerance 1e-8 against central differences at h = 1e-2 … 1e-7 and the
+motion's (a sawtooth while its steps stepped over the kinks on a grid fixed in time).
 
-`--part transit`: where generalized-α's derivative leaves the motion's: the history θ(t) of the first
+`--part transit`: whether generalized-α's derivative leaves the motion's: the history θ(t) of the first
 6 gradient scenes (quasi-rigid, generalized-α 1e-8) differentiated along ln a_p by `jacfwd`, against
 the motion's (Tsit5 1e-11, forward mode, stopping on the kinks) and generalized-α's own central
 difference (h = 1e-4), before and after the first band transit (the first impact), on both backbones.
@@ -273,7 +274,7 @@ def gradients() -> None:
 
 
 def sawtooth() -> None:
-    """Why generalized-α's derivatives through the bilinear's kinks are off (issue 56, item 1): on
+    """Whether generalized-α's derivatives through the bilinear's kinks are the motion's (issue 56, item 1): on
     the first 6 of `gradients`' scenes (quasi-rigid, generalized-α at 1e-8), d max θ/d ln a_p by
     `jacfwd` against central differences at h = 1e-2 … 1e-7 and the motion's derivative (Tsit5 1e-11,
     forward mode, stopping on the kinks). A smooth discrete map gives one value in every column;
@@ -298,7 +299,7 @@ def sawtooth() -> None:
 
 
 def transit() -> None:
-    """Where generalized-α's derivative leaves the motion's (issue 56, item 1): d θ(t)/d ln a_p on
+    """Whether generalized-α's derivative leaves the motion's (issue 56, item 1): d θ(t)/d ln a_p on
     the history, before and after the first crossing of the pre-yield band (the first impact).
     Errors are relative to the largest |d θ/d ln a_p| of the motion in the same window."""
     out("# bench_backbone --part transit: quasi-rigid, generalized-α 1e-8, d θ(t)/d ln a_p against the motion's (Tsit5 1e-11)")

@@ -34,7 +34,7 @@ import lineax as lx
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array, Float
 
-__all__ = ["inv", "solve", "cholesky", "solve_triangular", "eigvalsh", "expm", "SequentialLU"]
+__all__ = ["inv", "solve", "cholesky", "solve_triangular", "eigvalsh", "eigh_primal", "expm", "SequentialLU"]
 
 # `expm`: the Taylor degree at a scaled norm ≤ 1/4 (remainder 0.25¹³/13! ~ 2e-18) and the most
 # squarings (norms to 0.25·2¹⁶ ≈ 1.6e4)
@@ -142,6 +142,14 @@ def _eigvalsh_jvp(primals, tangents):
     (a,), (da,) = primals, tangents
     w, v = _eigh(a)
     return w, jnp.einsum("ji,jk,ki->i", v, da, v)  # dλᵢ = vᵢᵀ dA vᵢ (distinct eigenvalues)
+
+
+def eigh_primal(a: Float[Array, "n n"]) -> tuple[Float[Array, " n"], Float[Array, "n n"]]:
+    """(eigenvalues ascending, orthonormal eigenvectors) of a symmetric A, without derivatives (A
+    enters through `stop_gradient`): for the factors of a quasi-Newton tangent, whose converged
+    iterate does not depend on them (and whose eigenvalues may be degenerate, where the eigenvectors'
+    derivative is not defined)."""
+    return _eigh(jax.lax.stop_gradient(a))
 
 
 _lu_factor = _one_at_a_time(lambda a: tuple(jax.scipy.linalg.lu_factor(a)), (2,))

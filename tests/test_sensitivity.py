@@ -138,13 +138,15 @@ def test_it_is_asked_for_and_needs_forward_mode():
 def test_a_checked_batch_follows_its_runs_tangent():
     """A flexible column's `Checked` default in a batch: the run (the first of its `parts`) carries
     the tangent, the companion judges it; every cell's sensitivity, status and summary are those of
-    `simulate` (one loop of both)."""
+    `simulate` (one loop of both): the summaries to 1e-10, the sensitivities to 1e-7 (the runs'
+    round-off differs with the batch's shape, and a sensitivity of 37 amplifies it: measured 1.3e-8
+    relative since generalized-α's tangent is applied from its modes, two products where one was)."""
     model = SpringModel(jr.Block.from_size(50.0, 5.0), Column.concrete(), n_elements=4)
     ex = jr.RickerPulse(jnp.array([2.0, 3.0, 4.0, 2.5]) * G * float(model.block.tan_alpha),
                         jnp.array([2.0, 3.0, 5.0, 4.0]) * float(model.block.p_r))
     batch = jr.run_batch(model, ex, sensitivity=True)
     alone = jax.vmap(lambda e: jr.simulate(model, e, sensitivity=True))(ex)
-    np.testing.assert_allclose(np.asarray(batch.sensitivity), np.asarray(alone.sensitivity), rtol=1e-8)
+    np.testing.assert_allclose(np.asarray(batch.sensitivity), np.asarray(alone.sensitivity), rtol=1e-7)
     np.testing.assert_allclose(np.asarray(batch.max_theta), np.asarray(alone.max_theta), rtol=1e-10, atol=1e-12)
     assert np.array_equal(jr.status_codes(batch.status), jr.status_codes(alone.status))
     assert np.all(np.asarray(batch.sensitivity) > 0)

@@ -14,7 +14,7 @@ each backbone here has one parameter, the pre-yield rotation ``θs = smoothing �
   max|θ|/α over the 192 quasi-rigid scenes of `benchmarks/bench_backbone.py` whose limit is
   settled, 8.3e-4 over its 48 flexible ones (2.2e-2 at θy = 1e-4 α′). Its kinks are `kinked`:
   the diffrax integrator stops on them and restarts on the other branch (`moment_on_branch`),
-  so derivatives through it are the motion's; generalized-α steps over them;
+  so derivatives through it are the motion's; generalized-α ends its steps on them likewise;
 - `Tanh` (the flexible SM's default at θs = 1e-4 α′): ``M = My tanh(θ/θs)``, smooth everywhere,
   so derivatives through any integrator are good; it reaches 99.5 % of My only at 3 θs and its
   error at equal θs is 9–30× the bilinear's (same study: 4.9e-2 quasi-rigid, 3.9e-2 flexible at
@@ -80,6 +80,10 @@ class AbstractBackbone(eqx.Module):
         to ±My): the moment of a run between two kinks (`kinked`)."""
         raise NotImplementedError
 
+    def solve_on_branch(self, r, k, branch):
+        """`solve` with the unit moment continued from `branch` (`moment_on_branch`)."""
+        raise NotImplementedError
+
     def potential(self, theta, My, theta_s):
         return My * theta_s * self.unit_potential(theta / theta_s)
 
@@ -93,6 +97,9 @@ class Bilinear(AbstractBackbone):
 
     def moment_on_branch(self, theta, My, theta_s, branch):
         return My * jnp.where(branch == 0, theta / theta_s, branch)
+
+    def solve_on_branch(self, r, k, branch):
+        return jnp.where(branch == 0, r / (1.0 + k), r - k * branch)
 
     def unit_moment(self, u):
         return jnp.clip(u, -1.0, 1.0)

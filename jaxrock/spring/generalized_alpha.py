@@ -17,30 +17,39 @@ Newton on q₁ with three structural shortcuts, each exact or converging to the 
   bilinear backbone and for tanh by Newton from a point where it converges monotonically
   (`AbstractBackbone.solve`) — so the pre-yield branch (stiffness My/θs, up to 10⁶ × the
   rocking stiffness) never makes the iteration diverge, however large the step;
-- the rest of the tangent is the rest state's (``K₀ + γ/(β dt) C₀ + (1−αm)/((1−αf) β dt²) M``),
+- the rest of the tangent is the rest state's (``K(dt) = (1−αm)/(β dt²) M + (1−αf)(K₀ + γ/(β dt) C₀)``),
   rotated rigidly to the current base rotation (``T(θ) K T(θ)ᵀ``, `SpringSystem.rotate`: exact for
   a rigidly rotated column, as the strain energy is rotation invariant): a quasi-Newton iteration
   on the exact residual, which converges to the exact implicit step;
-- step sizes come from a ladder dt_k = dt_top / 2^k (k < `levels`), whose tangent inverses are
-  computed once per run; steps double only on their own grid, so records' sample times are hit.
+- K(dt) is inverted for any dt from the modes of (K₀, M), computed once per run (C₀ is Rayleigh's
+  a₁ K₀ up to the preload's geometric stiffness, plus the base damper's rank one, Sherman–Morrison),
+  so a step of any size costs a few matrix–vector products. Step sizes come from a ladder
+  dt_k = dt_top / 2^k (k < `levels`) on a grid; steps double only on their own grid, so records'
+  sample times are hit.
 
-Steps through the spring's pre-yield band (|θ| < 3 θs for tanh, θy for the bilinear backbone, where
-the moment turns from −My to My and the acceleration jumps by ~2 My/I) move θ by at most `crossing`
-θs. The displacement error estimate below allows a step of ~(tol/Δa)^½ there, which jumps the band
-in one or two steps; the impact's velocity change then depends on where the band falls on the step
-grid, which slides as the parameters move. The values carry a fast wiggle and `jacfwd`, the exact
-derivative of the discrete map, is its slope: on 64 random one-DOF scenes at 1e-6 its median error
-against Tsit5's reverse gradient was 250 % without the limit and 0.5 % with `crossing` = 1
-(`benchmarks/bench_gradients.py --part bias`; choice of the value there).
+Steps through the tanh spring's pre-yield band (|θ| < 3 θs, where the moment turns from −My to My and
+the acceleration jumps by ~2 My/I) move θ by at most `crossing` θs. The displacement error estimate
+below allows a step of ~(tol/Δa)^½ there, which jumps the band in one or two steps; the impact's
+velocity change then depends on where the band falls on the step grid, which slides as the
+parameters move. The values carry a fast wiggle and `jacfwd`, the exact derivative of the discrete
+map, is its slope: on 64 random one-DOF scenes at 1e-6 its median error against Tsit5's reverse
+gradient was 250 % without the limit and 0.5 % with `crossing` = 1 (`benchmarks/bench_gradients.py
+--part bias`; choice of the value there).
+
+A kinked backbone (the bilinear) is stepped branch by branch, as the diffrax integrator does with
+events: each step runs on one branch (its moment continued past the kinks, `moment_on_branch`); a
+step whose end leaves the branch is rejected and replaced by one that ends on the kink (its size by
+regula falsi on the end's distance to the kink, within the Newton iteration's accuracy in θ); the
+run goes on from there on the next branch, and the step grid restarts at the kink. No step straddles
+a kink and the steps after one move with it as the parameters move it: the discrete map is smooth,
+and `jacfwd` is the motion's derivative (a grid fixed in time made each step's error, and so the
+derivative, depend on where the kink fell on it: d max θ/d ln a_p tens of % off,
+`benchmarks/bench_backbone.py --part sawtooth`).
 
 The local error is Zienkiewicz & Xie's estimate ``dt² (β − 1/6)(a₁ − a₀)`` in a max norm,
 componentwise against ``atol·scale + rtol·|q|`` (scale: α′ for rotations, 2h α′ for displacements).
 Forward-mode differentiable (`jax.jvp`, `jax.jacfwd`: the loops are `lax.while_loop`s); for
-reverse mode use the diffrax `SpringIntegrator`. On a kinked backbone (the bilinear, the quasi-rigid
-model's default) its steps step over the kinks, which the diffrax integrator stops on: its values
-are right (`benchmarks/bench_backbone.py`), its derivatives and a run's sensitivity are not (d max θ
-/ d ln a_p a few % from central differences, `bench_backbone.py --part gradients`): use the smooth
-tanh backbone (the flexible model's default) or the `SpringIntegrator` for them.
+reverse mode use the diffrax `SpringIntegrator`.
 """
 
 from __future__ import annotations
@@ -65,6 +74,9 @@ from .system import SpringSystem
 # 10-element column: 2.2 µs a lane-step one at a time, 1.9 with blocks of 4 or 8, 3.0 with 16; 256
 # random scenes, 2 cores, the `Checked` default: 3.2 ms a scene one at a time, 2.7 in blocks of 8).
 BLOCK = 8
+# A landing on a kink (`GeneralizedAlphaStepper`): the most regula falsi attempts before the step
+# is taken where the last one ended
+MAX_LANDING = 8
 
 
 class GeneralizedAlpha(AbstractSpringIntegrator):
@@ -77,8 +89,9 @@ class GeneralizedAlpha(AbstractSpringIntegrator):
     - `max_newton`: Newton iterations per step before the step is retried at half the size;
     - `newton_tol`: Newton stops when its increment, or the error its contraction leaves, is below
       `newton_tol` × the error tolerance;
-    - `crossing`: the largest |Δθ| of a step through the spring's pre-yield band, in θs (module
-      docstring; None: only the error estimate limits such steps).
+    - `crossing`: the largest |Δθ| of a step through a smooth spring's pre-yield band, in θs
+      (module docstring; None: only the error estimate limits such steps). A kinked spring's steps
+      end on its kinks instead.
     """
 
     rtol: float = eqx.field(static=True, default=1e-5)
@@ -121,8 +134,7 @@ class GeneralizedAlpha(AbstractSpringIntegrator):
 class GeneralizedAlphaStepper(AbstractStepper):
     """A spring-model run by generalized-α (`AbstractStepper`): one step is `BLOCK` attempted steps
     of the adaptive scheme (module docstring); `n_iterations` counts the attempts. The state is a
-    dict of arrays; the ladder's tangent inverses, computed once per scene in `init`, ride in it
-    unchanged.
+    dict of arrays; the tangent's modes, computed once per scene in `init`, ride in it unchanged.
 
     Runs from the excitation's start to `SpringModel.run_end` or earlier: overturned at
     |θ| ≥ threshold·α′; or, for a summary, settled after the excitation (mechanical energy below
@@ -156,11 +168,11 @@ class GeneralizedAlphaStepper(AbstractStepper):
         # dealt over a CPU's cores and a `Checked` run's companion runs apart (two sets of 256
         # random 10-element scenes, 2 cores: 2.8–3.1 ms/scene against 3.1–3.5 on 16 lanes, 8 lanes
         # 5.3, 64 lanes 2.9). The last cells too on these lanes: one compiled size. A cell keeps
-        # its ladder of tangent inverses (levels × N² floats).
+        # the modes of its tangent ((N + 1) N floats).
         N = self.system.ndof
         if N == 1:
             return Schedule(passes=(128 // BLOCK, 256 // BLOCK, 512 // BLOCK, 1024 // BLOCK), smallest_batch=64)
-        return Schedule(passes=(256 // BLOCK,), smallest_batch=16, lanes=32, bytes_per_scene=self.integrator.levels * N * N * 8)
+        return Schedule(passes=(256 // BLOCK,), smallest_batch=16, lanes=32, bytes_per_scene=(N + 1) * N * 8)
 
     def init(self, exc):
         return self._loop(exc)[0]()
@@ -182,7 +194,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
 
     def _loop(self, excitation):
         """(initial, body, result) of the step loop on `excitation`: closures over the scene's
-        constants (cheap: the ladder's tangent inverses are computed in `initial` only)."""
+        constants (cheap: the tangent's modes are computed in `initial` only)."""
         ig, mech, model = self.integrator, self.system, self.model
         watch = model.watch(mech)
         t_stop = model.run_end(mech, excitation, self.save, self.t1)
@@ -205,6 +217,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
         t_end = jnp.asarray(excitation.t_end, dtype)
         t_free = 2 * jnp.pi / mech.p_r / 16
         dt_exc = jnp.where(jnp.isfinite(excitation.max_step), excitation.max_step, t_free)
+        sampled = excitation.step_ts is not None  # a record: its steps end on the samples
         j_exc = jnp.clip(jnp.floor(jnp.log2(t_free / dt_exc)), 0, n_levels // 2).astype(jnp.int32)
         dt_top = dt_exc * 2.0**j_exc
         ks = jnp.arange(n_levels)
@@ -214,34 +227,51 @@ class GeneralizedAlphaStepper(AbstractStepper):
 
         scale = mech.atol_scale()[:N]
         My, theta_s = mech.My, mech.theta_s
-        spring = (lambda th: jnp.zeros_like(th)) if clamp else mech.spring_moment
         theta_band = mech.theta_up  # the pre-yield band (tanh: |θ| < 3 θs, 99.5 % of My; bilinear: θy)
+        # a kinked backbone: each step runs on one branch (the moment continued from it), and a step
+        # that leaves it is replaced by one that ends on the kink (`attempt`): no step straddles it
+        kinked = mech.backbone.kinked and not clamp
+        c_base = jnp.zeros((), dtype) if clamp else mech.c  # the base damper in the tangent
+        a1_ray = jnp.zeros((), dtype) if mech.a1 is None else mech.a1
 
         def tol_of(q_a, q_b):
             return ig.atol * scale + ig.rtol * jnp.maximum(jnp.abs(q_a), jnp.abs(q_b))
 
-        def solve_theta(rhs, z0):
-            """θ with θ + z₀ M(θ) = rhs, i.e. u + k m(u) = r in u = θ/θs (k = z₀ My/θs ≥ 0,
-            r = rhs/θs): exact (`AbstractBackbone.solve`)."""
-            return mech.backbone.solve(rhs / theta_s, z0 * My / theta_s) * theta_s
+        def spring_on(branch):
+            """(M(θ), the θ with θ + z₀ M(θ) = rhs): the spring's moment and its exact scalar solve
+            (`AbstractBackbone.solve`; in u = θ/θs: u + k m(u) = r, k = z₀ My/θs ≥ 0), on `branch`
+            for a kinked backbone (`moment_on_branch`)."""
+            bb = mech.backbone
+            if clamp:
+                return (lambda th: jnp.zeros_like(th)), None
+            if kinked:
+                return (lambda th: bb.moment_on_branch(th, My, theta_s, branch),
+                        lambda rhs, z0: bb.solve_on_branch(rhs / theta_s, z0 * My / theta_s, branch) * theta_s)
+            return (mech.spring_moment, lambda rhs, z0: bb.solve(rhs / theta_s, z0 * My / theta_s) * theta_s)
 
         track = mech.track_energy
 
         def initial():
-            """The state at the excitation's start (the ladder's tangent inverses computed once)."""
-            K0, C0 = mech.tangents()
+            """The state at the excitation's start, with the modes of the tangent (computed once).
 
-            def k_eff(dt):
-                Kb = (1 - am) / (beta * dt**2) * M + (1 - af) * (gamma / (beta * dt) * C0 + K0)
-                if clamp:
-                    Kb = Kb * free[:, None] * free[None, :] + jnp.diag(1.0 - free)
-                return Kb
-
-            Kinv = _linalg.inv(jax.vmap(k_eff)(dts))  # (n_levels, N, N)
+            The step's tangent K(dt) = A M + (1 − αf) K₀ + B C₀ (A = (1 − αm)/(β dt²),
+            B = (1 − αf) γ/(β dt); K₀, C₀ at rest) is inverted for any dt from the modes of the
+            pencil (K₀, M), K₀ Φ = M Φ Λ, Φᵀ M Φ = I: with C₀ = a₁ K₀ + c e₀e₀ᵀ (Rayleigh on the
+            deformations, the base damper; up to the gravity preload's geometric stiffness, a
+            quasi-Newton tangent), K⁻¹ = Φ diag(1/(A + (1 − αf + B a₁) Λ)) Φᵀ corrected for the
+            damper's rank one (Sherman–Morrison): steps of any size, such as those ending on a
+            kink, cost a few matrix–vector products more than one of a fixed size."""
+            K0 = mech.tangents()[0]
+            ff = free[:, None] * free[None, :]
+            L = _linalg.cholesky(jax.lax.stop_gradient(M * ff + jnp.diag(1.0 - free)))
+            Li = _linalg.solve_triangular(L, jnp.eye(N, dtype=dtype))
+            S = Li @ jax.lax.stop_gradient(K0 * ff) @ Li.T
+            lam, V = _linalg.eigh_primal(0.5 * (S + S.T))
             y_init = mech.initial_state()  # [q, v] (+ the work integrals `WORK_FIELDS` when tracked)
             q0, v0 = y_init[:N], y_init[N : 2 * N]
+            branch0 = mech.branch_at(q0[0]) if kinked else jnp.zeros((), dtype)
             f0_rest, f0_ext, f0_damp = mech.forces_without_spring(t0, q0, v0, excitation)
-            f0_tot = f0_rest - spring(q0[0]) * e0
+            f0_tot = f0_rest - spring_on(branch0)[0](q0[0]) * e0
             a0 = _linalg.solve(M * free[:, None] * free[None, :] + jnp.diag(1.0 - free), f0_tot * free)
 
             # carry
@@ -252,28 +282,43 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 hist0 = {f: jnp.where(at0, vals0[f], jnp.nan) for f in fields}
             k_start = jnp.minimum(j_exc + 1, n_levels - 1)
             carry = dict(
-                n=jnp.zeros((), stride.dtype), k=k_start, t=t0, q=q0, v=v0, a=a0, f=f0_tot,
+                n=jnp.zeros((), stride.dtype), tg=t0,  # the step grid: tg + n dt_min
+                k=k_start, t=t0, q=q0, v=v0, a=a0, f=f0_tot,
                 ew=y_init[2 * N :] if track else jnp.zeros(0, dtype),  # the work integrals (`WORK_FIELDS`)
                 fd=f0_damp, fe=f0_ext,
                 rec=Record.start(q0[0]), done=jnp.asarray(False), failed=jnp.asarray(False),
                 rho=jnp.asarray(1.0, dtype),  # Newton's contraction, as last measured (unknown: 1)
                 steps=jnp.zeros((), jnp.int32), hist=hist0, ptr=jnp.sum(save_ts <= t0) if save_ts is not None else jnp.zeros((), jnp.int32),
-                Kinv=Kinv,
+                branch=branch0,
+                # a landing on a kink in progress: the bracket (dt, kink distance) on either side of
+                # it, the kink (σ of σ θs), the side last moved (Illinois), the attempts so far
+                land=jnp.asarray(False), bracket=jnp.zeros(4, dtype), kink=jnp.zeros((), dtype), side=jnp.zeros((), jnp.int32),
+                n_land=jnp.zeros((), jnp.int32),
+                modes=(Li.T @ V, lam),
             )
             return carry
 
-        def step(c):
-            """One attempted step from the carry's state at level k."""
-            k = c["k"]
-            dt = dts[k]
+        def step(c, dt, t1):
+            """One attempted step of size dt from the carry's state to t1."""
             t, q, v, a, f_tot = c["t"], c["q"], c["v"], c["a"], c["f"]
-            n1 = c["n"] + stride[k]
-            t1 = t0 + n1.astype(dtype) * dt_min
-            Ki = c["Kinv"][k]
+            Phi, lam = c["modes"]
+            A = (1 - am) / (beta * dt**2)
+            B = (1 - af) * gamma / (beta * dt)
+            d = 1.0 / (A + ((1 - af) + B * a1_ray) * lam)
+            k_base = lambda r: Phi @ (d * (Phi.T @ r))  # the tangent without the damper, inverted
+            u = k_base(e0)
+            bc = B * c_base
+            k_e0 = u / (1 + bc * u[0])  # K⁻¹ e₀
+
+            def k_inv(r):
+                w = k_base(r)
+                return w - bc * w[0] * k_e0
+
             th_rot = q[0]
-            apply = lambda r: mech.rotate(Ki @ mech.rotate(r, -th_rot), th_rot)
-            z = (1 - af) * mech.rotate(Ki[:, 0], th_rot) * free  # apply(e₀): the rotation keeps e₀
+            apply = lambda r: mech.rotate(k_inv(mech.rotate(r, -th_rot)), th_rot)
+            z = (1 - af) * mech.rotate(k_e0, th_rot) * free  # apply(e₀): the rotation keeps e₀
             z0 = z[0]
+            spring, solve_theta = spring_on(c["branch"])
             acc_of = lambda q1: (q1 - q - dt * v - dt**2 * (0.5 - beta) * a) / (beta * dt**2)
             vel_of = lambda a1: v + dt * ((1 - gamma) * a + gamma * a1)
 
@@ -321,39 +366,93 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 fe1 = fd1 = jnp.zeros_like(q1)
             f1_tot = (mech.mass_times((1 - am) * a1 + am * a) - af * f_tot) / (1 - af)
             err = jnp.max(jnp.abs(dt**2 * (beta - 1.0 / 6.0) * (a1 - a)) / tol_of(q, q1))
-            if ig.crossing is not None and not clamp:
+            if ig.crossing is not None and not clamp and not kinked:
                 # a step through the pre-yield band moves θ by at most `crossing` θs; the excess
                 # enters as an error of order 3, so the controller drops ~log2(excess) levels; at
                 # the ladder's bottom it no longer rejects (the band is resolved as far as it goes)
                 th0, th1 = q[0], q1[0]
                 through = (th0 * th1 <= 0) | (jnp.minimum(jnp.abs(th0), jnp.abs(th1)) < theta_band)
-                through = through & (k < n_levels - 1)
+                through = through & (c["k"] < n_levels - 1)
                 excess = jnp.where(through, jnp.abs(th1 - th0) / (ig.crossing * theta_s), 0.0)
                 err = jnp.maximum(err, excess**3)
             err = jnp.where(conv & jnp.isfinite(err), err, jnp.inf)
-            return dict(n1=n1, t1=t1, q1=q1, v1=v1, a1=a1 * free, f1=f1_tot, fe1=fe1, fd1=fd1, err=err, dt=dt, rho=rho)
+            # a kinked backbone: the landing tolerance, the Newton iteration's own accuracy in θ
+            eps = ig.newton_tol * tol_of(q, q1)[0]
+            return dict(t1=t1, q1=q1, v1=v1, a1=a1 * free, f1=f1_tot, fe1=fe1, fd1=fd1, err=err, dt=dt, rho=rho,
+                        eps=eps)
 
         def attempt(c, buf):
             """One attempted step of a cell still running (else nothing): the state after it, and
-            `buf` (the block's accepted step ends, `body`) with its end where accepted."""
+            `buf` (the block's accepted step ends, `body`) with its end where accepted.
+
+            A step ends on the grid of its level (from a point off the grid, on the next point of
+            it), or, on a kinked backbone, on the kink its branch's step crossed: the crossing step
+            is rejected and the step's size that ends on the kink is found by regula falsi (Illinois)
+            on the kink distance of the step's end, within the Newton iteration's accuracy in θ
+            (each try an attempt, so that under `vmap` no lane waits for another's landing); the
+            run then continues on the next branch."""
             active = ~c["done"] & (c["steps"] < ig.max_steps)
-            s = step(c)
             k = c["k"]
+            n1 = (c["n"] // stride[k] + 1) * stride[k]
+            t_grid = c["tg"] + n1.astype(dtype) * dt_min
+            # a record: a step from off its sample grid (after a kink) ends on the next sample at
+            # the latest, where the grid restarts on the samples
+            clip = jnp.zeros((), bool)
+            if sampled:
+                i_next = jnp.floor((c["t"] - t0) / dt_exc + 1e-9) + 1
+                t_sample = t0 + i_next * dt_exc
+                clip = (t_sample < t_grid) & (c["t"] < t_end)
+                t_grid = jnp.where(clip, t_sample, t_grid)
+            dt_grid = t_grid - c["t"]
+            lo_dt, lo_g, hi_dt, hi_g = c["bracket"]
+            dt_land = lo_dt - lo_g * (hi_dt - lo_dt) / (hi_g - lo_g)
+            landing = c["land"]
+            dt = jnp.where(landing, dt_land, dt_grid)
+            t1 = jnp.where(landing, c["t"] + dt_land, t_grid)
+            s = step(c, dt, t1)
             ok = s["err"] <= 1.0
+            # a kinked backbone: the kink σ θs a step leaves its branch b through (b = 0: σ = sign θ₁;
+            # b = ±1: σ = b), and how far θ lies inside the branch from that kink (< 0: past it)
+            b, th0, th1, eps = c["branch"], c["q"][0], s["q1"][0], s["eps"]
+            sigma = jnp.where(landing, c["kink"], jnp.where(b == 0, jnp.sign(th1), b))
+            inside = lambda th: jnp.where(b == 0, theta_s - sigma * th, b * th - theta_s)
+            g0, g1 = inside(th0), inside(th1)
+            crossed = kinked & (g1 < -eps)
+            # leaving the kink it stands on, backwards: the run continues on the other branch
+            at_kink = g0 <= eps
+            landed = landing & ((~crossed & (g1 <= eps)) | (c["n_land"] >= MAX_LANDING))
+            accept = ok & jnp.where(landing, landed, ~crossed)
             # level after this attempt: double (one level up) when the error allows twice the step
             # (0.9 err^(-1/3) ≥ 2), the step grid allows it and, during the excitation, dt stays
             # within its step; on rejection drop as many levels as the error asks (≥ 1)
-            grow = ok & (s["err"] < 0.125 / 1.5) & (k > 0)
-            aligned = (s["n1"] % stride[jnp.maximum(k - 1, 0)]) == 0
-            k_floor = jnp.where(s["t1"] < t_end, j_exc, 0)
+            grow = ok & ~landing & (s["err"] < 0.125 / 1.5) & (k > 0)
+            aligned = (n1 % stride[jnp.maximum(k - 1, 0)]) == 0
+            k_floor = jnp.where(t1 < t_end, j_exc, 0)
             k_up = jnp.where(grow & aligned & (k - 1 >= k_floor), k - 1, k)
             shrink = jnp.ceil(jnp.log2(jnp.maximum(s["err"], 1.0)) / 3.0 + 0.2).astype(jnp.int32)
             k_dn = jnp.minimum(k + jnp.where(jnp.isfinite(s["err"]), jnp.maximum(shrink, 1), 2), n_levels - 1)
             failed = (~ok) & (k == n_levels - 1)
-            k_new = jnp.where(ok, k_up, k_dn)
+            # the kink's bookkeeping: the branch beyond it, the bracket of a landing
+            beyond = jnp.where(b == 0, sigma, 0.0)
+            start = ok & crossed & ~landing & ~at_kink
+            flip = ok & crossed & ~landing & at_kink
+            move_hi = ok & crossed & landing & ~landed
+            move_lo = ok & landing & ~crossed & ~landed
+            illinois = jnp.where(move_hi & (c["side"] == 1), 0.5, 1.0)  # the end kept twice: its distance halved
+            illinois_hi = jnp.where(move_lo & (c["side"] == -1), 0.5, 1.0)
+            bracket = jnp.where(start, jnp.stack([jnp.zeros((), dtype), g0, dt, g1]),
+                      jnp.where(move_hi, jnp.stack([lo_dt, lo_g * illinois, dt, g1]),
+                      jnp.where(move_lo, jnp.stack([dt, g1, hi_dt, hi_g * illinois_hi]), c["bracket"])))
+            side = jnp.where(start, 0, jnp.where(move_hi, 1, jnp.where(move_lo, -1, c["side"])))
+            land_next = (landing & ok & ~landed) | start
+            # an accepted end off the grid (on a kink, on a record's sample) restarts the grid there:
+            # the steps that follow move with the kink as the parameters move it (a grid fixed in
+            # time would make each one's error, and the derivatives, depend on the kink's phase)
+            restart = landing | clip
+            n_new = jnp.where(restart, 0, n1)
+            tg_new = jnp.where(restart, t1, c["tg"])
 
             # accepted-step bookkeeping (the step's record from `buf`, at the block's end)
-            t1 = s["t1"]
             dt = s["dt"]
             ew = c["ew"]
             if track:
@@ -362,23 +461,27 @@ class GeneralizedAlphaStepper(AbstractStepper):
             # reaches it between two ends below, and a settled summary, at the block's end
             finished = (jnp.abs(s["q1"][0]) >= watch.overturn) | (t1 >= t_stop)
             new = dict(
-                n=s["n1"], k=k_new, t=t1, q=s["q1"], v=s["v1"], a=s["a1"], f=s["f1"], ew=ew, fd=s["fd1"], fe=s["fe1"],
-                rec=c["rec"], done=finished,
-                failed=jnp.asarray(False), steps=c["steps"] + 1, hist=c["hist"], ptr=c["ptr"], Kinv=c["Kinv"], rho=s["rho"],
+                n=n_new, tg=tg_new, k=jnp.where(landing, k, k_up), t=t1, q=s["q1"], v=s["v1"], a=s["a1"], f=s["f1"], ew=ew,
+                fd=s["fd1"], fe=s["fe1"], rec=c["rec"], done=finished,
+                failed=jnp.asarray(False), steps=c["steps"] + 1, hist=c["hist"], ptr=c["ptr"], rho=s["rho"],
+                branch=jnp.where(landed, beyond, c["branch"]), land=jnp.asarray(False), bracket=c["bracket"], kink=c["kink"],
+                side=c["side"], n_land=jnp.zeros((), jnp.int32),
             )
             if save_ts is not None:
                 new["hist"], new["ptr"] = _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track)
-            rejected = dict(c, k=jnp.where(active, k_new, k), steps=c["steps"] + active, done=c["done"] | (active & failed),
-                            failed=c["failed"] | (active & failed), rho=jnp.where(active, s["rho"], c["rho"]))
-            Kinv = new.pop("Kinv")  # constant: not copied through the select
-            del rejected["Kinv"]
-            take = ok & active
+            rejected = dict(c, k=jnp.where(active & ~ok, k_dn, k), steps=c["steps"] + active, done=c["done"] | (active & failed),
+                            failed=c["failed"] | (active & failed), rho=jnp.where(active, s["rho"], c["rho"]),
+                            branch=jnp.where(active & flip, beyond, c["branch"]), land=jnp.where(active, land_next, landing),
+                            bracket=jnp.where(active, bracket, c["bracket"]), kink=jnp.where(active & start, sigma, c["kink"]), side=jnp.where(active, side, c["side"]),
+                            n_land=jnp.where(active & land_next, c["n_land"] + 1, jnp.where(active, 0, c["n_land"])))
+            modes = rejected.pop("modes")  # constant: not copied through the select
+            take = accept & active
             out = jax.tree_util.tree_map(lambda x_ok, x_no: jnp.where(take, x_ok, x_no), new, rejected)
             ts, th, om, i = buf
             i = i + take
             buf = (ts.at[i].set(jnp.where(take, t1, ts[i])), th.at[i].set(jnp.where(take, s["q1"][0], th[i])),
                    om.at[i].set(jnp.where(take, s["v1"][0], om[i])), i)
-            return dict(out, Kinv=Kinv), buf
+            return dict(out, modes=modes), buf
 
         def body(c):
             """`BLOCK` attempts (`attempt`), then the record of their accepted steps (`Watch.steps`
