@@ -145,16 +145,13 @@ BACKBONES = {"bilinear": "Bilinear", "tanh": "Tanh"}  # name → a class of jaxr
 # Backbone and θs/α′: the study of benchmarks/bench_backbone.py (its results file): 192 quasi-rigid
 # and 48 flexible (concrete, 10 elements) scenes, tanα 0.05–0.35, 2h 1–50 m, ω_p/p′ 1–15,
 # a_p/(g tanα) 1–8, both pulses, and new seeded scenes with records; error of max|θ|/α against the
-# sharp limit (bilinear, θy = 1e-6 α). The default, the bilinear backbone at θy = 1e-5 α (the
-# paper's rigid-plastic spring as OpenSees' multilinear one), is within 1e-3 wherever the limit is
-# settled; tanh at θs = 1e-4 α, the default before, left up to 4.9e-2 (quasi-rigid) and 3.9e-2
-# (flexible). Its kinks are events of the diffrax integrator (`SpringIntegrator`), so derivatives
-# through it are the motion's (`bench_backbone.py --part gradients`: calibration's reverse
-# ∂r_eq²/∂c̄ within 1e-7 of central differences, d max θ / d ln a_p within 1e-4); generalized-α
-# steps over them (its forward derivatives, and a run's sensitivity, then a few % to tens of %
-# off), so the flexible model, whose default integrator is generalized-α, keeps tanh at 1e-4 α
-# until generalized-α stops on the kinks too (issue 56).
-DEFAULT_BACKBONE = {"quasi-rigid": "bilinear", "flexible": "tanh"}  # per spring model
+# sharp limit (bilinear, θy = 1e-6 α). The default for both models, the bilinear backbone at
+# θy = 1e-5 α (the paper's rigid-plastic spring as OpenSees' multilinear one), is within 8.3e-4
+# wherever the limit is settled; tanh at θs = 1e-4 α, the default before, left up to 4.9e-2
+# (quasi-rigid) and 3.9e-2 (flexible). Its kinks are events of the diffrax integrator
+# (`SpringIntegrator`) and step ends of generalized-α, so derivatives through it are the motion's
+# (`bench_backbone.py --part gradients`).
+DEFAULT_BACKBONE = {"quasi-rigid": "bilinear", "flexible": "bilinear"}  # per spring model
 DEFAULT_SMOOTHING = {"bilinear": 1e-5, "tanh": 1e-4}  # θs/α′ per backbone
 
 

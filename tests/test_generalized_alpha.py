@@ -377,7 +377,7 @@ def _ln_a_p_derivatives(integrator, scenes):
 
     def peak(a_r, h, ta, wr):
         blk = Block.from_slenderness(h, ta)
-        model = SpringModel(blk, backbone="tanh", smoothing=1e-4)  # the smooth spring: generalized-α steps over the bilinear's kinks
+        model = SpringModel(blk, backbone="tanh", smoothing=1e-4)  # the smooth spring's crossing limit (the bilinear's kinks: test_backbone.py)
         return simulate(model, RickerPulse(a_r * blk.uplift_acceleration, wr * blk.p_r), integrator=integrator).max_theta
 
     return np.asarray(jax.vmap(jax.jacfwd(peak))(*(jnp.asarray(x) for x in scenes))) * scenes[0]

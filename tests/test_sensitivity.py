@@ -23,11 +23,13 @@ def pulse(ar, wr, block=BLOCK, kind=jr.RickerPulse):
 def same_summary(a, b):
     """The run with its tangent gives the plain run's summary: the same verdicts and statuses, the
     same numbers to their last bits but for the rounding of another compiled program (the primal
-    under `jvp`: 1e-14 relative on the flexible column)."""
+    under `jvp`: 1e-14 relative on the flexible column on the tanh spring; 1.6e-12 on its default
+    bilinear spring, whose steps end on the kinks by regula falsi on distances of ~θy = 1e-5 α, which
+    amplifies the rounding: bound 1e-11)."""
     for name in ("overturned", "uplifted", "n_impacts"):
         np.testing.assert_array_equal(np.asarray(getattr(a, name)), np.asarray(getattr(b, name)), err_msg=name)
     for name in ("max_theta", "t_overturn", "t_uplift"):
-        np.testing.assert_allclose(np.asarray(getattr(a, name)), np.asarray(getattr(b, name)), rtol=1e-12, err_msg=name)
+        np.testing.assert_allclose(np.asarray(getattr(a, name)), np.asarray(getattr(b, name)), rtol=1e-11, err_msg=name)
     assert np.array_equal(jr.status_codes(a.status), jr.status_codes(b.status))
 
 
@@ -107,9 +109,9 @@ def test_a_batch_reports_each_runs_sensitivity_as_simulate_does():
 
 @pytest.mark.parametrize("model, integrator", [
     (SpringModel(BLOCK), None),  # the forward-mode Tsit5 default
-    # generalized-α steps over the default bilinear backbone's kinks and its tangent is then off
-    # (1.4 against the rigid model's 3.8 here): the smooth tanh, the flexible model's default
-    (SpringModel(BLOCK, backbone="tanh"), GeneralizedAlpha(1e-6, 1e-6)),
+    # generalized-α on the default bilinear spring: its steps end on the kinks (stepping over them
+    # its tangent was off: 1.4 against the rigid model's 3.8 here)
+    (SpringModel(BLOCK), GeneralizedAlpha(1e-6, 1e-6)),
     (SpringModel(jr.Block.from_size(50.0, 5.0), Column.concrete(), n_elements=4), None),  # Checked generalized-α
 ])
 def test_the_spring_models_report_it_too(model, integrator):

@@ -26,8 +26,9 @@ Forces are gradients of energies (`jax.grad`), so the energy balance holds by co
 Time integration, chosen by work–precision (`SpringModel.default_integrator`,
 `benchmarks/bench_spring.py`): flexible columns: adaptive generalized-α (`GeneralizedAlpha`,
 `jaxrock.spring.generalized_alpha`: the spring solved exactly as a scalar equation in each Newton
-iteration, the rest-state tangent rotated to the rocked configuration, step-size ladder with
-precomputed tangent inverses; forward-mode differentiable); the one-DOF quasi-rigid model:
+iteration, the rest-state tangent rotated to the rocked configuration and inverted for any step
+from its modes, steps that end on the bilinear spring's kinks; forward-mode differentiable); the
+one-DOF quasi-rigid model:
 its linear pre-yield phase stepped exactly to the first yield (`rest`), then explicit Tsit5 (its
 pre-yield branch is only mildly stiff; reverse-mode differentiable). Either
 model takes either integrator; diffrax's ESDIRK (`SpringIntegrator(solver="kvaerno5")`, full

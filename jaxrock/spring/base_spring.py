@@ -8,14 +8,14 @@ rocks, unloading along the loading path. A computable spring needs a finite pre-
 each backbone here has one parameter, the pre-yield rotation ``θs = smoothing · α′``
 (`SpringModel.smoothing`), and tends to the rigid-plastic envelope as θs → 0:
 
-- `Bilinear` (the paper's OpenSees spring, as ``ElasticMultiLinear``; the quasi-rigid SM's
+- `Bilinear` (the paper's OpenSees spring, as ``ElasticMultiLinear``; both spring models'
   default at θy = 1e-5 α′): linear up to the yield rotation θy = θs, then flat at My. Its error
   against the rigid-plastic limit is of first order in θy: at 1e-5 α′ at most 7.6e-4 in
   max|θ|/α over the 192 quasi-rigid scenes of `benchmarks/bench_backbone.py` whose limit is
   settled, 8.3e-4 over its 48 flexible ones (2.2e-2 at θy = 1e-4 α′). Its kinks are `kinked`:
   the diffrax integrator stops on them and restarts on the other branch (`moment_on_branch`),
   so derivatives through it are the motion's; generalized-α ends its steps on them likewise;
-- `Tanh` (the flexible SM's default at θs = 1e-4 α′): ``M = My tanh(θ/θs)``, smooth everywhere,
+- `Tanh` (the flexible SM's default at θs = 1e-4 α′ until issue 56): ``M = My tanh(θ/θs)``, smooth everywhere,
   so derivatives through any integrator are good; it reaches 99.5 % of My only at 3 θs and its
   error at equal θs is 9–30× the bilinear's (same study: 4.9e-2 quasi-rigid, 3.9e-2 flexible at
   θs = 1e-4 α′).

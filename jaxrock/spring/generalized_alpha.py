@@ -431,20 +431,24 @@ class GeneralizedAlphaStepper(AbstractStepper):
             k_up = jnp.where(grow & aligned & (k - 1 >= k_floor), k - 1, k)
             shrink = jnp.ceil(jnp.log2(jnp.maximum(s["err"], 1.0)) / 3.0 + 0.2).astype(jnp.int32)
             k_dn = jnp.minimum(k + jnp.where(jnp.isfinite(s["err"]), jnp.maximum(shrink, 1), 2), n_levels - 1)
-            failed = (~ok) & (k == n_levels - 1)
-            # the kink's bookkeeping: the branch beyond it, the bracket of a landing
+            # the kink's bookkeeping: the branch beyond it, the bracket of a landing. A step that
+            # crosses a kink only brackets it, whatever its error (past the kink its branch's
+            # continuation, e.g. the stiff pre-yield spring, is not the motion)
             beyond = jnp.where(b == 0, sigma, 0.0)
-            start = ok & crossed & ~landing & ~at_kink
-            flip = ok & crossed & ~landing & at_kink
-            move_hi = ok & crossed & landing & ~landed
+            solved = jnp.isfinite(s["err"])
+            start = solved & crossed & ~landing & ~at_kink
+            flip = solved & crossed & ~landing & at_kink
+            move_hi = solved & crossed & landing & ~landed
             move_lo = ok & landing & ~crossed & ~landed
+            bracketing = start | flip | move_hi | move_lo
+            failed = (~ok) & (k == n_levels - 1) & ~bracketing
             illinois = jnp.where(move_hi & (c["side"] == 1), 0.5, 1.0)  # the end kept twice: its distance halved
             illinois_hi = jnp.where(move_lo & (c["side"] == -1), 0.5, 1.0)
             bracket = jnp.where(start, jnp.stack([jnp.zeros((), dtype), g0, dt, g1]),
                       jnp.where(move_hi, jnp.stack([lo_dt, lo_g * illinois, dt, g1]),
                       jnp.where(move_lo, jnp.stack([dt, g1, hi_dt, hi_g * illinois_hi]), c["bracket"])))
             side = jnp.where(start, 0, jnp.where(move_hi, 1, jnp.where(move_lo, -1, c["side"])))
-            land_next = (landing & ok & ~landed) | start
+            land_next = (landing & (move_hi | move_lo)) | start
             # an accepted end off the grid (on a kink, on a record's sample) restarts the grid there:
             # the steps that follow move with the kink as the parameters move it (a grid fixed in
             # time would make each one's error, and the derivatives, depend on the kink's phase)
@@ -469,7 +473,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
             )
             if save_ts is not None:
                 new["hist"], new["ptr"] = _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track)
-            rejected = dict(c, k=jnp.where(active & ~ok, k_dn, k), steps=c["steps"] + active, done=c["done"] | (active & failed),
+            rejected = dict(c, k=jnp.where(active & ~ok & ~bracketing, k_dn, k), steps=c["steps"] + active, done=c["done"] | (active & failed),
                             failed=c["failed"] | (active & failed), rho=jnp.where(active, s["rho"], c["rho"]),
                             branch=jnp.where(active & flip, beyond, c["branch"]), land=jnp.where(active, land_next, landing),
                             bracket=jnp.where(active, bracket, c["bracket"]), kink=jnp.where(active & start, sigma, c["kink"]), side=jnp.where(active, side, c["side"]),

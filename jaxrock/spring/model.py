@@ -41,17 +41,17 @@ class SpringModel(AbstractModel):
     - `cbar`: damper coefficient c̄ (None: eq. 17 with α′, resolved at construction: always an array);
     - `backbone` (static): the spring's moment–rotation curve, `jaxrock.Bilinear` or
       `Tanh` (or their names; default `DEFAULT_BACKBONE`: the bilinear, the paper's rigid-plastic
-      spring, for the quasi-rigid SM; tanh for a flexible column, whose default generalized-α
-      integrator steps over the bilinear's kinks);
+      spring, for both models);
     - `smoothing`: θs/α′, the backbone's pre-yield rotation (the bilinear yield rotation θy, or
       the tanh's θs; default `DEFAULT_SMOOTHING`: 1e-5 bilinear, 1e-4 tanh). What the defaults
-      leave, over `benchmarks/bench_backbone.py`'s scenes: the quasi-rigid bilinear at 1e-5 within
-      1e-3 of α of the rigid-plastic limit wherever that limit is settled, its derivatives the
-      motion's (the diffrax integrator stops on the kinks); the flexible tanh at 1e-4 up to 3.9e-2
-      of α (median 7.6e-4). For values within 1e-3 there pass `backbone="bilinear"` *and* a tight
-      integrator, `GeneralizedAlpha(1e-7, 1e-7)` (the study's setting: 8.3e-4); under the default
-      `Checked(GeneralizedAlpha(1e-5, 1e-5))` the bilinear's total error reaches 6.9e-3, and
-      generalized-α's forward derivatives through its kinks are off (README, "Numerics");
+      leave, over `benchmarks/bench_backbone.py`'s scenes: the bilinear at 1e-5 within 8.3e-4 of α
+      of the rigid-plastic limit wherever that limit is settled (quasi-rigid and flexible); with the
+      flexible default integrator `Checked(GeneralizedAlpha(1e-5, 1e-5))` the total error (spring
+      and steps) is 4.9e-5 – 7.0e-5 median, at most 1.9e-3 – 3.6e-3 on runs whose status is ok and
+      6.6e-3 – 2.5e-2 on those it flags `inaccurate` (tanh at 1e-4: 5.5e-4 – 7.9e-4 median,
+      1.0e-2 – 2.4e-2 ok); `GeneralizedAlpha(1e-6, 1e-6)` leaves 5.7e-4 – 1.4e-3 at 1.8× the cost.
+      Derivatives through the kinks are the motion's with either integrator (both end their steps
+      on the kinks);
     - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
       at the first fixed-base period of the discretised column *with its added rotational masses*
       (`first_period`; they lengthen it a little, `tests/test_spring.py`);
