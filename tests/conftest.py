@@ -136,6 +136,10 @@ MOVED_TO_SLOW = {
     "program); reverse mode refused in one line: the slow set",
     "tests/test_sensitivity.py::test_the_sensitivity_is_the_slope_of_the_motion_in_the_scale[3.0-5.0-AntisymmetricRickerPulse]":
     "34 s; [2.0-3.0-RickerPulse] stays",
+    # eighth round (issue 56 added two tests of derivatives through the kinks: the flexible one, the
+    # default integrator's path, stays)
+    "tests/test_backbone.py::test_generalized_alpha_lands_on_the_kinks_so_its_derivative_is_the_motions": "20 s; "
+    "generalized-α through the kinks: flexible_derivatives_through_the_kinks_match_central_differences",
 }
 
 
