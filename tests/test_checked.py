@@ -36,7 +36,7 @@ def test_checked_keeps_the_run_and_is_honest_on_a_grid():
     grid with 10 elements); and a tight accuracy (1e-5, below the estimates) flags cells."""
     ex = grid()
     plain, checked = run(GA5, ex), run(Checked(GA5), ex)
-    ref = run(GeneralizedAlpha(1e-8, 1e-8, max_steps=400_000), ex)
+    ref = run(GeneralizedAlpha(1e-8, 1e-8, levels=24, max_steps=400_000), ex)  # 16 levels: one cell solver_failed at the bottom
     np.testing.assert_array_equal(np.asarray(checked.max_theta), np.asarray(plain.max_theta))
     np.testing.assert_array_equal(np.asarray(checked.t_uplift), np.asarray(plain.t_uplift))
     assert np.all(np.asarray(ref.status._value) == 0)
@@ -91,7 +91,9 @@ def test_a_checked_batch_runs_its_run_and_companion_apart_with_each_cells_verdic
     names = jr.status_names(batch.status)
     assert np.array_equal(names, jr.status_names(alone.status)) and set(names.tolist()) == {"ok", "inaccurate"}, names
     np.testing.assert_array_equal(np.asarray(batch.n_iterations), np.asarray(alone.n_iterations))
-    np.testing.assert_allclose(np.asarray(batch.max_theta), np.asarray(alone.max_theta), rtol=1e-10, atol=1e-12)
+    # the rounding of the two programs differs; the bilinear spring's landings (regula falsi on
+    # kink distances of ~θy) amplify it: measured 4.1e-10 relative (on tanh it met 1e-10)
+    np.testing.assert_allclose(np.asarray(batch.max_theta), np.asarray(alone.max_theta), rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize("kw, match", [

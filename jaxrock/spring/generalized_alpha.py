@@ -77,6 +77,7 @@ BLOCK = 8
 # A landing on a kink (`GeneralizedAlphaStepper`): the most regula falsi attempts before the step
 # is taken where the last one ended
 MAX_LANDING = 8
+LANDING_BAND = 0.05  # the landing tolerance at most this fraction of θs
 
 
 class GeneralizedAlpha(AbstractSpringIntegrator):
@@ -376,8 +377,10 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 excess = jnp.where(through, jnp.abs(th1 - th0) / (ig.crossing * theta_s), 0.0)
                 err = jnp.maximum(err, excess**3)
             err = jnp.where(conv & jnp.isfinite(err), err, jnp.inf)
-            # a kinked backbone: the landing tolerance, the Newton iteration's own accuracy in θ
-            eps = ig.newton_tol * tol_of(q, q1)[0]
+            # a kinked backbone: the landing tolerance, the Newton iteration's own accuracy in θ, at
+            # most a twentieth of the pre-yield band (at a loose tolerance the accuracy can exceed
+            # the band: every θ in it would count as on a kink)
+            eps = jnp.minimum(ig.newton_tol * tol_of(q, q1)[0], LANDING_BAND * theta_s)
             return dict(t1=t1, q1=q1, v1=v1, a1=a1 * free, f1=f1_tot, fe1=fe1, fd1=fd1, err=err, dt=dt, rho=rho,
                         eps=eps)
 
