@@ -47,9 +47,9 @@ class SpringModel(AbstractModel):
       leave, over `benchmarks/bench_backbone.py`'s scenes: the bilinear at 1e-5 within 8.3e-4 of α
       of the rigid-plastic limit wherever that limit is settled (quasi-rigid and flexible); with the
       flexible default integrator `Checked(GeneralizedAlpha(1e-5, 1e-5))` the total error (spring
-      and steps) is 4.9e-5 – 7.0e-5 median, at most 1.9e-3 – 3.6e-3 on runs whose status is ok and
-      6.6e-3 – 2.5e-2 on those it flags `inaccurate` (tanh at 1e-4: 5.5e-4 – 7.9e-4 median,
-      1.0e-2 – 2.4e-2 ok); `GeneralizedAlpha(1e-6, 1e-6)` leaves 5.7e-4 – 1.4e-3 at 1.8× the cost.
+      and steps) is 4.9e-5 – 7.0e-5 median, 6.6e-3 – 2.5e-2 at most (tanh at 1e-4: 5.5e-4 – 7.9e-4,
+      2.4e-2 – 3.5e-2), the largest, in a probe, on runs it flags `inaccurate` (README, "Numerics");
+      `Checked(GeneralizedAlpha(1e-6, 1e-6))` came near 1e-3 there at about twice the cost.
       Derivatives through the kinks are the motion's with either integrator (both end their steps
       on the kinks);
     - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
