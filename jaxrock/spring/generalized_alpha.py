@@ -221,10 +221,9 @@ class GeneralizedAlphaStepper(AbstractStepper):
         sampled = excitation.step_ts is not None  # a record: its steps end on the samples
         j_exc = jnp.clip(jnp.floor(jnp.log2(t_free / dt_exc)), 0, n_levels // 2).astype(jnp.int32)
         dt_top = dt_exc * 2.0**j_exc
-        ks = jnp.arange(n_levels)
-        dts = dt_top * 2.0 ** (-ks.astype(dtype))
-        stride = (2 ** (n_levels - 1 - ks)).astype(jnp.int64 if dtype == jnp.float64 else jnp.int32)
-        dt_min = dts[-1]
+        # level k steps stride[k] grid intervals of dt_min = dt_top / 2^(levels − 1)
+        stride = (2 ** (n_levels - 1 - jnp.arange(n_levels))).astype(jnp.int64 if dtype == jnp.float64 else jnp.int32)
+        dt_min = dt_top * 2.0 ** (1 - n_levels)
 
         scale = mech.atol_scale()[:N]
         My, theta_s = mech.My, mech.theta_s
@@ -246,7 +245,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
             if clamp:
                 return (lambda th: jnp.zeros_like(th)), None
             if kinked:
-                return (lambda th: bb.moment_on_branch(th, My, theta_s, branch),
+                return (mech.on_branch(branch).spring_moment,
                         lambda rhs, z0: bb.solve_on_branch(rhs / theta_s, z0 * My / theta_s, branch) * theta_s)
             return (mech.spring_moment, lambda rhs, z0: bb.solve(rhs / theta_s, z0 * My / theta_s) * theta_s)
 
