@@ -174,7 +174,11 @@ class Watch(eqx.Module):
         peaks = step_peaks(ts, th, om)
         over = jnp.max(peaks) >= self.overturn
         k = jnp.argmax(peaks >= self.overturn)
-        t_over = hermite_crossing(ts[k], ts[k + 1], th[k], th[k + 1], om[k], om[k + 1], self.overturn)
+        # not overturned: a valid stand-in step (an unused entry's NaN would reach reverse mode's
+        # cotangents through the discarded crossing, as 0 · NaN)
+        pick = lambda x, k, fill: jnp.where(over, x[k], fill)
+        t_over = hermite_crossing(pick(ts, k, 0.0), pick(ts, k + 1, 1.0), pick(th, k, 0.0), pick(th, k + 1, self.overturn),
+                                  pick(om, k, 0.0), pick(om, k + 1, 0.0), self.overturn)
         return Record(
             peak=jnp.max(peaks),
             t_uplift=first_exceedance(ts, th, om, self.uplift),

@@ -273,10 +273,11 @@ class AbstractModel(eqx.Module):
     threshold: eqx.AbstractVar[Float[Array, ""]]  # overturned at |θ| ≥ threshold·α′
 
     @abc.abstractmethod
-    def default_integrator(self, autodiff: str = "reverse") -> AbstractIntegrator:
-        """The integrator used when `simulate` is given none; with `autodiff="forward"` the same
-        settings differentiated in forward mode (`jax.jvp`, `jax.jacfwd`: one pass per input, the
-        cheaper choice for one or a few parameters, e.g. `find_boundary`)."""
+    def default_integrator(self, autodiff: str | None = None) -> AbstractIntegrator:
+        """The integrator used when `simulate` is given none (under `jax.grad`: its reverse-mode
+        form); with `autodiff="forward"` or `"reverse"` the same settings differentiated in that mode
+        (forward: `jax.jvp`, `jax.jacfwd`, one pass per input, the cheaper choice for one or a few
+        parameters, e.g. `find_boundary`); None: the model's own choice."""
 
     @abc.abstractmethod
     def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> AbstractStepper:
@@ -380,9 +381,9 @@ def _autodiff_advice(error: str, model, integrator) -> str | None:
         return (f"jax.jvp/jax.jacfwd cannot differentiate {name} in reverse mode (autodiff='reverse'); pass "
                 f"integrator=model.default_integrator(autodiff='forward') (the same settings, forward mode), or use jax.grad")
     if "Reverse-mode differentiation does not work for lax.while_loop" in error:
-        return (f"jax.grad/jax.vjp/jax.jacrev cannot differentiate {name}: its steps differentiate in forward mode only; use "
-                f"jax.jacfwd or jax.jvp (one pass per parameter), or for the quasi-rigid spring the default Tsit5 integrator "
-                f"(SpringModel without a column), which differentiates either way")
+        return (f"jax.grad/jax.vjp/jax.jacrev cannot differentiate {name} with autodiff='forward'; pass "
+                f"integrator=model.default_integrator(autodiff='reverse') (the same settings, reverse mode), or leave the "
+                f"integrator out, or use jax.jacfwd or jax.jvp (one pass per parameter)")
     return None
 
 
@@ -412,8 +413,8 @@ def scene_arguments(model: AbstractModel, excitation: AbstractExcitation, *, int
             raise JaxrockInputError(f"save times reach {float(jnp.max(save.ts)):g} s, beyond t1 = {float(t1):g} s")
     if t1 is not None and is_concrete((t1, excitation)):
         check_range("t1 (end time) [s]", t1, float(excitation.t_start), float("inf"), lo_open=True, hi_open=True)
-    if integrator is None:
-        integrator = model.default_integrator()
+    if integrator is None:  # under jax.grad the default's reverse-mode form (the same settings, the same values)
+        integrator = model.default_integrator("reverse" if _in_reverse_mode() else None)
     return model, excitation, integrator, save, t1
 
 

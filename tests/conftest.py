@@ -132,7 +132,7 @@ MOVED_TO_SLOW = {
     "the_companion_starts_as_the_run_does_and_leaves_out_only_the_crossing_limit",
     "tests/test_backbone.py::test_peak_derivative_through_kinks_in_both_modes[forward]": "47 s; derivatives through the kinks: "
     "the_kink_is_an_event_so_derivatives_through_it_match_central_differences",
-    "tests/test_hostile.py::test_reverse_mode_through_generalized_alpha_says_which_setting_can": "38 s (compiling the reverse "
+    "tests/test_hostile.py::test_reverse_mode_through_forward_generalized_alpha_says_which_setting_can": "38 s (compiling the reverse "
     "program); reverse mode refused in one line: the slow set",
     "tests/test_sensitivity.py::test_the_sensitivity_is_the_slope_of_the_motion_in_the_scale[3.0-5.0-AntisymmetricRickerPulse]":
     "34 s; [2.0-3.0-RickerPulse] stays",

@@ -123,19 +123,22 @@ def test_forward_mode_through_a_reverse_mode_integrator_says_which_setting_can()
         jax.jacfwd(rigid)(5.0)
 
 
-def test_reverse_mode_through_generalized_alpha_says_which_setting_can():
-    """Issue 52: `jax.grad` through the flexible model's default generalized-α (forward mode only)
-    was a raw JAX error raised in the backward pass ("Reverse-mode differentiation does not work
-    for lax.while_loop"). `simulate` now sees the reverse-mode trace and names what works, also
-    under vmap; `jax.jacfwd` still runs."""
+def test_reverse_mode_through_forward_generalized_alpha_says_which_setting_can():
+    """Issue 52: `jax.grad` through generalized-α in forward mode was a raw JAX error raised in the
+    backward pass ("Reverse-mode differentiation does not work for lax.while_loop"). `simulate` now
+    sees the reverse-mode trace and names what works, also under vmap; `jax.jacfwd` still runs.
+    (The default integrator under `jax.grad` takes its reverse-mode form: test_backbone's
+    test_flexible_reverse_mode_is_forward_mode.)"""
     block = jr.Block.from_slenderness(10.0, 0.2)
+    forward = jr.GeneralizedAlpha(1e-5, 1e-5)
 
     def flexible(cbar):
-        return jr.simulate(jr.SpringModel(block, jr.Column(30e9), cbar=cbar, n_elements=2), jr.RickerPulse(5.0, 6.0)).max_theta
+        return jr.simulate(jr.SpringModel(block, jr.Column(30e9), cbar=cbar, n_elements=2), jr.RickerPulse(5.0, 6.0),
+                           integrator=forward).max_theta
 
-    with pytest.raises(JaxrockInputError, match=re.escape("its steps differentiate in forward mode only; use jax.jacfwd or jax.jvp")):
+    with pytest.raises(JaxrockInputError, match=re.escape("pass integrator=model.default_integrator(autodiff='reverse')")):
         jax.grad(flexible)(0.05)
-    with pytest.raises(JaxrockInputError, match="forward mode only"):
+    with pytest.raises(JaxrockInputError, match="cannot differentiate GeneralizedAlpha with autodiff='forward'"):
         jax.grad(lambda c: jax.vmap(flexible)(c).sum())(jnp.asarray([0.05, 0.06]))
     assert np.isfinite(float(jax.jacfwd(flexible)(0.05)))
 

@@ -48,8 +48,8 @@ class RigidModel(AbstractModel):
     def history_fields(self):
         return ("theta", "theta_dot")
 
-    def default_integrator(self, autodiff: str = "reverse") -> EventIntegrator:
-        return EventIntegrator(autodiff=autodiff)
+    def default_integrator(self, autodiff: str | None = None) -> EventIntegrator:
+        return EventIntegrator(autodiff=autodiff or "reverse")
 
     def acceleration(self, t, theta, side, excitation: AbstractExcitation):
         """θ̈ about the corner on `side` (±1), eq. 2 / eq. 22."""

@@ -48,13 +48,17 @@ derivative, depend on where the kink fell on it: d max θ/d ln a_p tens of % off
 
 The local error is Zienkiewicz & Xie's estimate ``dt² (β − 1/6)(a₁ − a₀)`` in a max norm,
 componentwise against ``atol·scale + rtol·|q|`` (scale: α′ for rotations, 2h α′ for displacements).
-Forward-mode differentiable (`jax.jvp`, `jax.jacfwd`: the loops are `lax.while_loop`s); for
-reverse mode use the diffrax `SpringIntegrator`.
+Differentiable in one mode, chosen by `autodiff`: "forward" (`jax.jvp`, `jax.jacfwd`; the loops are
+`lax.while_loop`s) or "reverse" (`jax.grad`, `jax.vjp`; the run's loop is equinox's checkpointed
+while loop, the Newton iteration's a bounded one: the same iterations, the same values up to the
+order in which XLA sums, ~1e-13).
+Both differentiate the same discrete map, so the two modes' derivatives agree to round-off.
 """
 
 from __future__ import annotations
 
 import equinox as eqx
+import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
 
@@ -63,7 +67,7 @@ from jaxtyping import Array
 from .. import _linalg
 from .._validate import JaxrockInputError
 from ..bookkeeping import Record
-from ..model import AbstractModel, AbstractSpringIntegrator, AbstractStepper, Schedule
+from ..model import AbstractModel, AbstractSpringIntegrator, AbstractStepper, Schedule, check_autodiff
 from ..results import Save, Solution, Status
 from .system import SpringSystem
 
@@ -92,7 +96,9 @@ class GeneralizedAlpha(AbstractSpringIntegrator):
       `newton_tol` × the error tolerance;
     - `crossing`: the largest |Δθ| of a step through a smooth spring's pre-yield band, in θs
       (module docstring; None: only the error estimate limits such steps). A kinked spring's steps
-      end on its kinks instead.
+      end on its kinks instead;
+    - `autodiff`: "forward" (`jax.jacfwd`, `jax.jvp`) or "reverse" (`jax.grad`, `jax.vjp`): the mode
+      its loops differentiate in (module docstring); the values are the same.
     """
 
     rtol: float = eqx.field(static=True, default=1e-5)
@@ -103,8 +109,10 @@ class GeneralizedAlpha(AbstractSpringIntegrator):
     max_newton: int = eqx.field(static=True, default=8)
     newton_tol: float = eqx.field(static=True, default=1e-2)
     crossing: float | None = eqx.field(static=True, default=1.0)
+    autodiff: str = eqx.field(static=True, default="forward")
 
     def __check_init__(self):
+        check_autodiff(self.autodiff)
         if not (0 < self.rtol < 1) or not (0 < self.atol < 1):
             raise JaxrockInputError(f"rtol = {self.rtol:g}, atol = {self.atol:g}: both must be in (0, 1)")
         if not (0.0 <= self.rho_inf <= 1.0):
@@ -156,7 +164,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
 
     @property
     def checkpointed(self) -> bool:
-        return False  # forward mode only (`lax.while_loop`)
+        return self.integrator.autodiff == "reverse"
 
     @property
     def schedule(self) -> Schedule:
@@ -353,7 +361,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
             # batch's iterations are its slowest cell's, and a finished (overturned) cell's state
             # was the one that needed a third iteration
             init = (qp, c["done"], 0, jnp.asarray(jnp.inf, dtype), c["rho"])
-            q1, conv, _, _, rho = jax.lax.while_loop(ncond, nbody, init)
+            q1, conv, _, _, rho = _while(ncond, nbody, init, ig.max_newton, ig.autodiff)
             # The last increment is applied: an increment δ left out is a velocity error γδ/(β dt),
             # which grows as the steps shrink. a₁, v₁ are linear in q₁; the total force is the one
             # the step equation implies at q₁ (exact to O(δ²)), so no force evaluation is repeated,
@@ -407,8 +415,9 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 t_grid = jnp.where(clip, t_sample, t_grid)
             dt_grid = t_grid - c["t"]
             lo_dt, lo_g, hi_dt, hi_g = c["bracket"]
-            dt_land = lo_dt - lo_g * (hi_dt - lo_dt) / (hi_g - lo_g)
             landing = c["land"]
+            span = jnp.where(landing, hi_g - lo_g, -1.0)  # no bracket: a stand-in (0/0 would reach reverse mode's cotangents)
+            dt_land = lo_dt - lo_g * (hi_dt - lo_dt) / span
             dt = jnp.where(landing, dt_land, dt_grid)
             t1 = jnp.where(landing, c["t"] + dt_land, t_grid)
             s = step(c, dt, t1)
@@ -474,7 +483,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 side=c["side"], n_land=jnp.zeros((), jnp.int32),
             )
             if save_ts is not None:
-                new["hist"], new["ptr"] = _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track)
+                new["hist"], new["ptr"] = _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track, ig.autodiff)
             rejected = dict(c, k=jnp.where(active & ~ok & ~bracketing, k_dn, k), steps=c["steps"] + active, done=c["done"] | (active & failed),
                             failed=c["failed"] | (active & failed), rho=jnp.where(active, s["rho"], c["rho"]),
                             branch=jnp.where(active & flip, beyond, c["branch"]), land=jnp.where(active, land_next, landing),
@@ -514,7 +523,17 @@ class GeneralizedAlphaStepper(AbstractStepper):
         return initial, body, result
 
 
-def _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track):
+def _while(cond, body, init, max_steps: int, autodiff: str):
+    """`lax.while_loop` (forward mode), or for reverse mode equinox's bounded loop of at most
+    `max_steps` iterations (`cond` must bound it; nested in the run's checkpointed loop, a
+    checkpointed one failed under `vmap`, "Nonconstant batch"): the same iterations either way
+    (under `vmap` a bounded loop computes all `max_steps` and keeps the ones `cond` allows)."""
+    if autodiff == "reverse":
+        return eqxi.while_loop(cond, body, init, max_steps=max_steps, kind="bounded")
+    return jax.lax.while_loop(cond, body, init)
+
+
+def _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track, autodiff):
     """Write the save times in (t, t₁] from the cubic Hermite interpolant of the accepted step
     (q from q, v; v from v, a; the work integrals linearly)."""
     t, t1 = c["t"], s["t1"]
@@ -538,4 +557,4 @@ def _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track):
         hist = {f: hist[f].at[ptr].set(vals[f]) for f in fields}
         return hist, ptr + 1
 
-    return jax.lax.while_loop(cond, body, (c["hist"], c["ptr"]))
+    return _while(cond, body, (c["hist"], c["ptr"]), n_ts, autodiff)

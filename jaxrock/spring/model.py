@@ -111,7 +111,7 @@ class SpringModel(AbstractModel):
                 Limit("cbar (damper coefficient)", self.cbar, 0.0, math.inf, hi_open=True), *column)
 
     # -- AbstractModel --------------------------------------------------------------------------
-    def default_integrator(self, autodiff: str = "reverse") -> "SpringIntegrator | Checked":
+    def default_integrator(self, autodiff: str | None = None) -> "SpringIntegrator | Checked":
         """The work–precision choice (`jaxrock work-precision`, `benchmarks/bench_spring.py`; the
         measured errors and costs, and the alternatives, are in the README, "Numerics and
         performance"):
@@ -130,17 +130,19 @@ class SpringModel(AbstractModel):
         - flexible → `Checked(GeneralizedAlpha(1e-5, 1e-5))`, ρ∞ = 0.9, accuracy 1e-2 in max θ/α′:
           its status is `inaccurate` where a companion run at 1e-4 differs by more (a stiff spring
           or column, where the local tolerance does not bound the global error: `jaxrock.spring.
-          checked`); the companion's looser steps on top of the run's (a batch runs the two apart). Forward-mode differentiable; for
-          `jax.grad` through a flexible column, `SpringIntegrator()`, Kvaerno5 + Newton.
+          checked`); the companion's looser steps on top of the run's (a batch runs the two apart).
 
-        `autodiff`: "reverse" or "forward" (`AbstractModel.default_integrator`); the flexible
-        default is forward-mode either way."""
-        check_autodiff(autodiff)
+        `autodiff`: "reverse" or "forward" (`AbstractModel.default_integrator`); None: reverse for
+        the quasi-rigid spring, forward for the flexible column (`jax.jacfwd`; `simulate` under
+        `jax.grad` takes the reverse-mode form, the same values)."""
+        if autodiff is not None:
+            check_autodiff(autodiff)
         if self.column is None:
             # 20,000 steps (the class default) ended the 40-s packaged records B-ELC000 and A-TIN000
             # (dt 0.005 s) in max_steps at every factor, the block at rest on its ringing spring
-            return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000, autodiff=autodiff)
-        return Checked(GeneralizedAlpha(rtol=1e-5, atol=1e-5))
+            return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000,
+                                    autodiff=autodiff or "reverse")
+        return Checked(GeneralizedAlpha(rtol=1e-5, atol=1e-5, autodiff=autodiff or "forward"))
 
     @property
     def history_fields(self) -> tuple[str, ...]:
