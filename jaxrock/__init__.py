@@ -21,6 +21,7 @@ of its own.
 
 import importlib as _importlib
 import importlib.util as _importlib_util
+from typing import TYPE_CHECKING as _TYPE_CHECKING
 
 from . import runtime as _runtime
 
@@ -52,6 +53,51 @@ _EXPORTS = {
     "calibration_report": "reports",  # writes figures: matplotlib is imported with it
 }
 __all__ = list(_EXPORTS)
+
+if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checkers, IDEs); never run
+    from .geometry import G as G, Block as Block, pulse_of_ratios as pulse_of_ratios, ratios_of_pulse as ratios_of_pulse
+    from .excitation import (
+        AbstractExcitation as AbstractExcitation, RickerPulse as RickerPulse,
+        AntisymmetricRickerPulse as AntisymmetricRickerPulse, Record as Record, StillGround as StillGround,
+    )
+    from ._validate import JaxrockInputError as JaxrockInputError
+    from .results import (
+        Save as Save, Solution as Solution, Status as Status, status_names as status_names, status_codes as status_codes,
+    )
+    from .outputs import SUMMARY as SUMMARY, Output as Output
+    from .model import (
+        AbstractIntegrator as AbstractIntegrator, AbstractModel as AbstractModel, AbstractStepper as AbstractStepper,
+        AbstractSpringIntegrator as AbstractSpringIntegrator, Schedule as Schedule, simulate as simulate,
+    )
+    from .scene import (
+        ModelKind as ModelKind, register_model_kind as register_model_kind, DEFAULT_SMOOTHING as DEFAULT_SMOOTHING,
+        DEFAULT_BACKBONE as DEFAULT_BACKBONE,
+    )
+    from .sensitivity import Sensitivity as Sensitivity, verdict_uncertain as verdict_uncertain
+    from .rigid import EventIntegrator as EventIntegrator, RigidModel as RigidModel
+    from .spring import (
+        SpringModel as SpringModel, SpringSystem as SpringSystem, Column as Column, SpringIntegrator as SpringIntegrator,
+        GeneralizedAlpha as GeneralizedAlpha, Checked as Checked, AbstractBackbone as AbstractBackbone, Bilinear as Bilinear,
+        Tanh as Tanh, cbar_eq17 as cbar_eq17, first_period_eq21 as first_period_eq21, pushover_eq9 as pushover_eq9,
+    )
+    from .io.records import (
+        el_centro as el_centro, builtin_record as builtin_record, read_at2 as read_at2, read_record as read_record,
+        read_records as read_records, read_two_column as read_two_column,
+    )
+    from .io.scenes_file import read_scenes as read_scenes
+    from .intensity import record_measures as record_measures, suite_measures as suite_measures
+    from .analyses.fragility import fit_lognormal as fit_lognormal
+    from .analyses import (
+        Spectrum as Spectrum, RecordSpectrum as RecordSpectrum, overturning_spectrum as overturning_spectrum,
+        record_overturning_scale as record_overturning_scale, refine_boundaries as refine_boundaries, run_batch as run_batch,
+        run_scenes as run_scenes, energy_ratio as energy_ratio, energy_ratio_grid as energy_ratio_grid,
+        calibrate_cbar as calibrate_cbar, CalibrationResult as CalibrationResult, fit_power_law as fit_power_law,
+        rm_target as rm_target, Sweep as Sweep, run_sweep as run_sweep, least_overturning_scale as least_overturning_scale,
+        overturning_probability as overturning_probability, Boundary as Boundary, find_boundary as find_boundary,
+        boundary_slope as boundary_slope,
+    )
+    from .runtime import use_cpu_cores as use_cpu_cores
+    from .reports import calibration_report as calibration_report
 
 
 def __getattr__(name):

@@ -122,10 +122,6 @@ def check_positive(name: str, x) -> None:
     check_range(name, x, 0.0, math.inf, lo_open=True, hi_open=True)
 
 
-def check_nonnegative(name: str, x) -> None:
-    check_range(name, x, 0.0, math.inf, hi_open=True)
-
-
 def check_grid(name: str, values, lo: float = 0.0) -> np.ndarray:
     """A grid axis: non-empty, finite, > lo, strictly increasing."""
     v = np.asarray(values, dtype=float).ravel()

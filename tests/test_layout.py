@@ -54,3 +54,20 @@ def test_imports_go_down_the_layers(path, parts):
     own = RANK[parts[0]]
     up = [(top, line) for top, line in _imports(path, parts) if RANK.get(top, own) < own]
     assert not up, f"{'/'.join(parts)} imports upward: " + ", ".join(f"{t} (line {n})" for t, n in up)
+
+
+def test_static_tools_see_the_public_api():
+    """`jaxrock/__init__.py` loads its names lazily (`_EXPORTS`, PEP 562), which static tools cannot
+    follow; its `if _TYPE_CHECKING:` block imports the same names explicitly (`X as X`, a re-export
+    to type checkers). The two lists are one: every exported name from its module, nothing else."""
+    tree = ast.parse((ROOT / "__init__.py").read_text())
+    value = next(n.value for n in tree.body if isinstance(n, ast.Assign) and getattr(n.targets[0], "id", None) == "_EXPORTS")
+    exports = eval(compile(ast.Expression(value), "_EXPORTS", "eval"), {"__builtins__": {}, "dict": dict})  # literals and dict.fromkeys
+    block = next(n for n in tree.body if isinstance(n, ast.If) and getattr(n.test, "id", None) == "_TYPE_CHECKING")
+    typed = {}
+    for node in block.body:
+        assert isinstance(node, ast.ImportFrom) and node.level == 1, ast.dump(node)
+        for alias in node.names:
+            assert alias.asname == alias.name, f"{alias.name} must be re-exported as itself (`{alias.name} as {alias.name}`)"
+            typed[alias.name] = node.module
+    assert typed == exports

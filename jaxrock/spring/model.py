@@ -221,10 +221,6 @@ class SpringModel(AbstractModel):
     def base_rotation(self, y):
         return y[0]
 
-    def base_velocity(self, y):
-        N = 1 if self.column is None else beam.n_dof(self.n_elements)
-        return y[N]
-
     def static_potential(self, theta):
         """The one-DOF SM's own exact potential at zero velocity, My θs log cosh(θ/θs) − m g h (1 − cosθ)
         [J] (→ SPEC's E(θ) = m g R (sinα|θ| − cosα(1 − cosθ)) as θs → 0). For the flexible model
