@@ -57,6 +57,8 @@ Both differentiate the same discrete map, so the two modes' derivatives agree to
 
 from __future__ import annotations
 
+import dataclasses
+
 import equinox as eqx
 import equinox.internal as eqxi
 import jax
@@ -140,10 +142,42 @@ class GeneralizedAlpha(AbstractSpringIntegrator):
         return GeneralizedAlphaStepper(self, model, system, save, t1)
 
 
+class GAState(eqx.Module):
+    """The state of a generalized-α run (one scene), carried from attempt to attempt."""
+
+    n: Array  # the step grid: the step ends are tg + n dt_min (restarted at a kink, a record's sample)
+    tg: Array
+    k: Array  # the level of the next step (dt_top / 2^k)
+    t: Array
+    q: Array  # displacements, velocities, accelerations, the total force at t
+    v: Array
+    a: Array
+    f: Array
+    ew: Array  # the work integrals (`WORK_FIELDS`) when tracked, else empty
+    fd: Array  # the damping and ground forces at t (the work integrals' integrands)
+    fe: Array
+    rec: Record
+    done: Array
+    failed: Array
+    rho: Array  # Newton's contraction, as last measured (unknown: 1)
+    steps: Array  # attempts so far
+    hist: dict | None  # a history's saved values (None: a summary) and the next save time's index
+    ptr: Array
+    branch: Array  # the spring's branch (a kinked backbone: 0 pre-yield, ±1 yielded)
+    # a landing on a kink in progress: the bracket (dt, kink distance) on either side of it, the
+    # kink (σ of σ θs), the side last moved (Illinois), the attempts so far
+    land: Array
+    bracket: Array
+    kink: Array
+    side: Array
+    n_land: Array
+    modes: tuple | None  # the tangent's modes (Φ, λ), constant over the run (`initial`)
+
+
 class GeneralizedAlphaStepper(AbstractStepper):
     """A spring-model run by generalized-α (`AbstractStepper`): one step is `BLOCK` attempted steps
     of the adaptive scheme (module docstring); `n_iterations` counts the attempts. The state is a
-    dict of arrays; the tangent's modes, computed once per scene in `init`, ride in it unchanged.
+    `GAState`; the tangent's modes, computed once per scene in `init`, ride in it unchanged.
 
     Runs from the excitation's start to `SpringModel.run_end` or earlier: overturned at
     |θ| ≥ threshold·α′; or, for a summary, settled after the excitation (mechanical energy below
@@ -190,11 +224,11 @@ class GeneralizedAlphaStepper(AbstractStepper):
         return self._loop(exc)[1](c)
 
     def done(self, c):
-        return c["done"] | (c["steps"] >= self.max_steps)
+        return c.done | (c.steps >= self.max_steps)
 
     def motion(self, c):
         a = self.system.alpha_r
-        return c["t"], c["q"][0] / a, c["v"][0] / a
+        return c.t, c.q[0] / a, c.v[0] / a
 
     def finish(self, exc, c) -> Solution:
         out = self._loop(exc)[2](c)
@@ -289,17 +323,15 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 at0 = save_ts <= t0
                 hist0 = {f: jnp.where(at0, vals0[f], jnp.nan) for f in fields}
             k_start = jnp.minimum(j_exc + 1, n_levels - 1)
-            carry = dict(
-                n=jnp.zeros((), stride.dtype), tg=t0,  # the step grid: tg + n dt_min
+            carry = GAState(
+                n=jnp.zeros((), stride.dtype), tg=t0,
                 k=k_start, t=t0, q=q0, v=v0, a=a0, f=f0_tot,
                 ew=y_init[2 * N :] if track else jnp.zeros(0, dtype),  # the work integrals (`WORK_FIELDS`)
                 fd=f0_damp, fe=f0_ext,
                 rec=Record.start(q0[0]), done=jnp.asarray(False), failed=jnp.asarray(False),
-                rho=jnp.asarray(1.0, dtype),  # Newton's contraction, as last measured (unknown: 1)
+                rho=jnp.asarray(1.0, dtype),
                 steps=jnp.zeros((), jnp.int32), hist=hist0, ptr=jnp.sum(save_ts <= t0) if save_ts is not None else jnp.zeros((), jnp.int32),
                 branch=branch0,
-                # a landing on a kink in progress: the bracket (dt, kink distance) on either side of
-                # it, the kink (σ of σ θs), the side last moved (Illinois), the attempts so far
                 land=jnp.asarray(False), bracket=jnp.zeros(4, dtype), kink=jnp.zeros((), dtype), side=jnp.zeros((), jnp.int32),
                 n_land=jnp.zeros((), jnp.int32),
                 modes=(Li.T @ V, lam),
@@ -308,8 +340,8 @@ class GeneralizedAlphaStepper(AbstractStepper):
 
         def step(c, dt, t1):
             """One attempted step of size dt from the carry's state to t1."""
-            t, q, v, a, f_tot = c["t"], c["q"], c["v"], c["a"], c["f"]
-            Phi, lam = c["modes"]
+            t, q, v, a, f_tot = c.t, c.q, c.v, c.a, c.f
+            Phi, lam = c.modes
             A = (1 - am) / (beta * dt**2)
             B = (1 - af) * gamma / (beta * dt)
             d = 1.0 / (A + ((1 - af) + B * a1_ray) * lam)
@@ -326,7 +358,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
             apply = lambda r: mech.rotate(k_inv(mech.rotate(r, -th_rot)), th_rot)
             z = (1 - af) * mech.rotate(k_e0, th_rot) * free  # apply(e₀): the rotation keeps e₀
             z0 = z[0]
-            spring, solve_theta = spring_on(c["branch"])
+            spring, solve_theta = spring_on(c.branch)
             acc_of = lambda q1: (q1 - q - dt * v - dt**2 * (0.5 - beta) * a) / (beta * dt**2)
             vel_of = lambda a1: v + dt * ((1 - gamma) * a + gamma * a1)
 
@@ -360,7 +392,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
             # a finished cell of a batch (its result frozen) does not iterate: under vmap the
             # batch's iterations are its slowest cell's, and a finished (overturned) cell's state
             # was the one that needed a third iteration
-            init = (qp, c["done"], 0, jnp.asarray(jnp.inf, dtype), c["rho"])
+            init = (qp, c.done, 0, jnp.asarray(jnp.inf, dtype), c.rho)
             q1, conv, _, _, rho = _while(ncond, nbody, init, ig.max_newton, ig.autodiff)
             # The last increment is applied: an increment δ left out is a velocity error γδ/(β dt),
             # which grows as the steps shrink. a₁, v₁ are linear in q₁; the total force is the one
@@ -380,7 +412,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
                 # the ladder's bottom it no longer rejects (the band is resolved as far as it goes)
                 th0, th1 = q[0], q1[0]
                 through = (th0 * th1 <= 0) | (jnp.minimum(jnp.abs(th0), jnp.abs(th1)) < theta_band)
-                through = through & (c["k"] < n_levels - 1)
+                through = through & (c.k < n_levels - 1)
                 excess = jnp.where(through, jnp.abs(th1 - th0) / (ig.crossing * theta_s), 0.0)
                 err = jnp.maximum(err, excess**3)
             err = jnp.where(conv & jnp.isfinite(err), err, jnp.inf)
@@ -401,37 +433,37 @@ class GeneralizedAlphaStepper(AbstractStepper):
             on the kink distance of the step's end, within the Newton iteration's accuracy in θ
             (each try an attempt, so that under `vmap` no lane waits for another's landing); the
             run then continues on the next branch."""
-            active = ~c["done"] & (c["steps"] < ig.max_steps)
-            k = c["k"]
-            n1 = (c["n"] // stride[k] + 1) * stride[k]
-            t_grid = c["tg"] + n1.astype(dtype) * dt_min
+            active = ~c.done & (c.steps < ig.max_steps)
+            k = c.k
+            n1 = (c.n // stride[k] + 1) * stride[k]
+            t_grid = c.tg + n1.astype(dtype) * dt_min
             # a record: a step from off its sample grid (after a kink) ends on the next sample at
             # the latest, where the grid restarts on the samples
             clip = jnp.zeros((), bool)
             if sampled:
-                i_next = jnp.floor((c["t"] - t0) / dt_exc + 1e-9) + 1
+                i_next = jnp.floor((c.t - t0) / dt_exc + 1e-9) + 1
                 t_sample = t0 + i_next * dt_exc
-                clip = (t_sample < t_grid) & (c["t"] < t_end)
+                clip = (t_sample < t_grid) & (c.t < t_end)
                 t_grid = jnp.where(clip, t_sample, t_grid)
-            dt_grid = t_grid - c["t"]
-            lo_dt, lo_g, hi_dt, hi_g = c["bracket"]
-            landing = c["land"]
+            dt_grid = t_grid - c.t
+            lo_dt, lo_g, hi_dt, hi_g = c.bracket
+            landing = c.land
             span = jnp.where(landing, hi_g - lo_g, -1.0)  # no bracket: a stand-in (0/0 would reach reverse mode's cotangents)
             dt_land = lo_dt - lo_g * (hi_dt - lo_dt) / span
             dt = jnp.where(landing, dt_land, dt_grid)
-            t1 = jnp.where(landing, c["t"] + dt_land, t_grid)
+            t1 = jnp.where(landing, c.t + dt_land, t_grid)
             s = step(c, dt, t1)
             ok = s["err"] <= 1.0
             # a kinked backbone: the kink σ θs a step leaves its branch b through (b = 0: σ = sign θ₁;
             # b = ±1: σ = b), and how far θ lies inside the branch from that kink (< 0: past it)
-            b, th0, th1, eps = c["branch"], c["q"][0], s["q1"][0], s["eps"]
-            sigma = jnp.where(landing, c["kink"], jnp.where(b == 0, jnp.sign(th1), b))
+            b, th0, th1, eps = c.branch, c.q[0], s["q1"][0], s["eps"]
+            sigma = jnp.where(landing, c.kink, jnp.where(b == 0, jnp.sign(th1), b))
             inside = lambda th: jnp.where(b == 0, theta_s - sigma * th, b * th - theta_s)
             g0, g1 = inside(th0), inside(th1)
             crossed = kinked & (g1 < -eps)
             # leaving the kink it stands on, backwards: the run continues on the other branch
             at_kink = g0 <= eps
-            landed = landing & ((~crossed & (g1 <= eps)) | (c["n_land"] >= MAX_LANDING))
+            landed = landing & ((~crossed & (g1 <= eps)) | (c.n_land >= MAX_LANDING))
             accept = ok & jnp.where(landing, landed, ~crossed)
             # level after this attempt: double (one level up) when the error allows twice the step
             # (0.9 err^(-1/3) ≥ 2), the step grid allows it and, during the excitation, dt stays
@@ -453,72 +485,73 @@ class GeneralizedAlphaStepper(AbstractStepper):
             move_lo = ok & landing & ~crossed & ~landed
             bracketing = start | flip | move_hi | move_lo
             failed = (~ok) & (k == n_levels - 1) & ~bracketing
-            illinois = jnp.where(move_hi & (c["side"] == 1), 0.5, 1.0)  # the end kept twice: its distance halved
-            illinois_hi = jnp.where(move_lo & (c["side"] == -1), 0.5, 1.0)
+            illinois = jnp.where(move_hi & (c.side == 1), 0.5, 1.0)  # the end kept twice: its distance halved
+            illinois_hi = jnp.where(move_lo & (c.side == -1), 0.5, 1.0)
             bracket = jnp.where(start, jnp.stack([jnp.zeros((), dtype), g0, dt, g1]),
                       jnp.where(move_hi, jnp.stack([lo_dt, lo_g * illinois, dt, g1]),
-                      jnp.where(move_lo, jnp.stack([dt, g1, hi_dt, hi_g * illinois_hi]), c["bracket"])))
-            side = jnp.where(start, 0, jnp.where(move_hi, 1, jnp.where(move_lo, -1, c["side"])))
+                      jnp.where(move_lo, jnp.stack([dt, g1, hi_dt, hi_g * illinois_hi]), c.bracket)))
+            side = jnp.where(start, 0, jnp.where(move_hi, 1, jnp.where(move_lo, -1, c.side)))
             land_next = (landing & (move_hi | move_lo)) | start
             # an accepted end off the grid (on a kink, on a record's sample) restarts the grid there:
             # the steps that follow move with the kink as the parameters move it (a grid fixed in
             # time would make each one's error, and the derivatives, depend on the kink's phase)
             restart = landing | clip
             n_new = jnp.where(restart, 0, n1)
-            tg_new = jnp.where(restart, t1, c["tg"])
+            tg_new = jnp.where(restart, t1, c.tg)
 
             # accepted-step bookkeeping (the step's record from `buf`, at the block's end)
             dt = s["dt"]
-            ew = c["ew"]
+            ew = c.ew
             if track:
-                ew = ew + 0.5 * dt * (mech.powers(c["v"], c["fe"], c["fd"]) + mech.powers(s["v1"], s["fe1"], s["fd1"]))
+                ew = ew + 0.5 * dt * (mech.powers(c.v, c.fe, c.fd) + mech.powers(s["v1"], s["fe1"], s["fd1"]))
             # done at an end beyond the overturning rotation or the run's end; an interpolant that
             # reaches it between two ends below, and a settled summary, at the block's end
             finished = (jnp.abs(s["q1"][0]) >= watch.overturn) | (t1 >= t_stop)
-            new = dict(
-                n=n_new, tg=tg_new, k=jnp.where(landing, k, k_up), t=t1, q=s["q1"], v=s["v1"], a=s["a1"], f=s["f1"], ew=ew,
-                fd=s["fd1"], fe=s["fe1"], rec=c["rec"], done=finished,
-                failed=jnp.asarray(False), steps=c["steps"] + 1, hist=c["hist"], ptr=c["ptr"], rho=s["rho"],
-                branch=jnp.where(landed, beyond, c["branch"]), land=jnp.asarray(False), bracket=c["bracket"], kink=c["kink"],
-                side=c["side"], n_land=jnp.zeros((), jnp.int32),
+            new = dataclasses.replace(
+                c, n=n_new, tg=tg_new, k=jnp.where(landing, k, k_up), t=t1, q=s["q1"], v=s["v1"], a=s["a1"], f=s["f1"], ew=ew,
+                fd=s["fd1"], fe=s["fe1"], rec=c.rec, done=finished,
+                failed=jnp.asarray(False), steps=c.steps + 1, hist=c.hist, ptr=c.ptr, rho=s["rho"],
+                branch=jnp.where(landed, beyond, c.branch), land=jnp.asarray(False), bracket=c.bracket, kink=c.kink,
+                side=c.side, n_land=jnp.zeros((), jnp.int32), modes=None,
             )
             if save_ts is not None:
-                new["hist"], new["ptr"] = _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track, ig.autodiff)
-            rejected = dict(c, k=jnp.where(active & ~ok & ~bracketing, k_dn, k), steps=c["steps"] + active, done=c["done"] | (active & failed),
-                            failed=c["failed"] | (active & failed), rho=jnp.where(active, s["rho"], c["rho"]),
-                            branch=jnp.where(active & flip, beyond, c["branch"]), land=jnp.where(active, land_next, landing),
-                            bracket=jnp.where(active, bracket, c["bracket"]), kink=jnp.where(active & start, sigma, c["kink"]), side=jnp.where(active, side, c["side"]),
-                            n_land=jnp.where(active & land_next, c["n_land"] + 1, jnp.where(active, 0, c["n_land"])))
-            modes = rejected.pop("modes")  # constant: not copied through the select
+                hist, ptr = _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track, ig.autodiff)
+                new = dataclasses.replace(new, hist=hist, ptr=ptr)
+            rejected = dataclasses.replace(c, modes=None, k=jnp.where(active & ~ok & ~bracketing, k_dn, k), steps=c.steps + active, done=c.done | (active & failed),
+                            failed=c.failed | (active & failed), rho=jnp.where(active, s["rho"], c.rho),
+                            branch=jnp.where(active & flip, beyond, c.branch), land=jnp.where(active, land_next, landing),
+                            bracket=jnp.where(active, bracket, c.bracket), kink=jnp.where(active & start, sigma, c.kink), side=jnp.where(active, side, c.side),
+                            n_land=jnp.where(active & land_next, c.n_land + 1, jnp.where(active, 0, c.n_land)))
+            # the modes (constant) are left out of the select and put back
             take = accept & active
             out = jax.tree_util.tree_map(lambda x_ok, x_no: jnp.where(take, x_ok, x_no), new, rejected)
             ts, th, om, i = buf
             i = i + take
             buf = (ts.at[i].set(jnp.where(take, t1, ts[i])), th.at[i].set(jnp.where(take, s["q1"][0], th[i])),
                    om.at[i].set(jnp.where(take, s["v1"][0], om[i])), i)
-            return dict(out, modes=modes), buf
+            return dataclasses.replace(out, modes=c.modes), buf
 
         def body(c):
             """`BLOCK` attempts (`attempt`), then the record of their accepted steps (`Watch.steps`
             on the step ends, the block's start first) and, for a summary, whether the run has
             settled: once a block, not once a step (`BLOCK`)."""
             nan = jnp.full(BLOCK + 1, jnp.nan, dtype)
-            buf = (nan.at[0].set(c["t"]), nan.at[0].set(c["q"][0]), nan.at[0].set(c["v"][0]), jnp.zeros((), jnp.int32))
+            buf = (nan.at[0].set(c.t), nan.at[0].set(c.q[0]), nan.at[0].set(c.v[0]), jnp.zeros((), jnp.int32))
             c, (ts, th, om, _) = jax.lax.fori_loop(0, BLOCK, lambda _, cb: attempt(*cb), (c, buf))
-            rec = c["rec"].merge(watch.steps(ts, th, om))
-            finished = c["done"] | rec.overturned
+            rec = c.rec.merge(watch.steps(ts, th, om))
+            finished = c.done | rec.overturned
             if summary:
-                energy = mech.kinetic(c["v"]) + mech.potential(c["q"])
-                finished = finished | ((c["t"] >= t_end) & mech.settled(energy, rec.peak))
-            return dict(c, rec=rec, done=finished)
+                energy = mech.kinetic(c.v) + mech.potential(c.q)
+                finished = finished | ((c.t >= t_end) & mech.settled(energy, rec.peak))
+            return dataclasses.replace(c, rec=rec, done=finished)
 
         def result(c):
             status = Status.where(
-                c["failed"] | ~jnp.isfinite(c["rec"].peak),
+                c.failed | ~jnp.isfinite(c.rec.peak),
                 Status.solver_failed,
-                Status.where(c["done"], Status.ok, Status.max_steps),
+                Status.where(c.done, Status.ok, Status.max_steps),
             )
-            return dict(record=c["rec"], status=status, steps=c["steps"], history=c["hist"])
+            return dict(record=c.rec, status=status, steps=c.steps, history=c.hist)
 
         return initial, body, result
 
@@ -536,7 +569,7 @@ def _while(cond, body, init, max_steps: int, autodiff: str):
 def _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track, autodiff):
     """Write the save times in (t, t₁] from the cubic Hermite interpolant of the accepted step
     (q from q, v; v from v, a; the work integrals linearly)."""
-    t, t1 = c["t"], s["t1"]
+    t, t1 = c.t, s["t1"]
     dt = t1 - t
 
     def cond(st):
@@ -548,13 +581,13 @@ def _fill_history(mech, excitation, fields, save_ts, n_ts, c, s, new, track, aut
         ts = save_ts[ptr]
         u = (ts - t) / dt
         h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-        q = h00 * c["q"] + h10 * dt * c["v"] + h01 * s["q1"] + h11 * dt * s["v1"]
-        v = h00 * c["v"] + h10 * dt * c["a"] + h01 * s["v1"] + h11 * dt * s["a1"]
+        q = h00 * c.q + h10 * dt * c.v + h01 * s["q1"] + h11 * dt * s["v1"]
+        v = h00 * c.v + h10 * dt * c.a + h01 * s["v1"] + h11 * dt * s["a1"]
         y = jnp.concatenate([q, v])
         if track:
-            y = jnp.concatenate([y, (1 - u) * c["ew"] + u * new["ew"]])
+            y = jnp.concatenate([y, (1 - u) * c.ew + u * new.ew])
         vals = mech.history(ts, y, excitation, fields)
         hist = {f: hist[f].at[ptr].set(vals[f]) for f in fields}
         return hist, ptr + 1
 
-    return _while(cond, body, (c["hist"], c["ptr"]), n_ts, autodiff)
+    return _while(cond, body, (c.hist, c.ptr), n_ts, autodiff)
