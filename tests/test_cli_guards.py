@@ -311,3 +311,20 @@ def test_compressed_record_is_refused_without_printing_its_bytes(tmp_path):
     (tmp_path / "x.AT2").write_bytes(gzip.compress(at2.read_bytes()))
     r = invoke("simulate", "--record", tmp_path / "x.AT2")
     assert r.exit_code == 2 and "gzip-compressed; decompress it first" in r.output and len(r.output) < 300, r.output
+
+
+def test_a_registered_kind_gets_the_dearest_estimate():
+    """A model kind registered after the built-in ones has no measured cost (`CELL_SECONDS` raised
+    KeyError for it): its runs are estimated at the dearest built-in kind's cost, so a grid too big
+    for an hour is still refused without --yes (exit 2) and a small one is not."""
+    import typer
+
+    from jaxrock.cli import guards
+
+    assert guards.cell_seconds("newcomer") == max(guards.CELL_SECONDS.values()) == guards.CELL_SECONDS["spring-flexible"]
+    assert guards.cell_seconds("rigid") == guards.CELL_SECONDS["rigid"]
+    n_hour = int(guards.LIMIT_SECONDS / guards.cell_seconds("newcomer"))
+    with pytest.raises(typer.Exit) as e:
+        guards._estimate(2 * n_hour, "newcomer", yes=False)
+    assert e.value.exit_code == 2
+    guards._estimate(n_hour // 100, "newcomer", yes=False)  # under a minute: no refusal, no announcement

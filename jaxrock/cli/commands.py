@@ -16,7 +16,7 @@ import typer
 from . import guards
 from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untrusted, _guarded,
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds,
-                     CELL_SECONDS, SENSITIVITY_COST)
+                     SENSITIVITY_COST, cell_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_ENSEMBLE, MAX_REFINE, MODEL_PARAMETERS, PULSES,
                      RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, parameter_help)
@@ -84,7 +84,7 @@ def spectrum(
         check_output("--out", Path(f"{out}{suffix}"))
     _hold(out, "--out")
     kind = "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value
-    _estimate(wr.size * ar.size, kind, yes, per_cell=CELL_SECONDS[kind] * (SENSITIVITY_COST if sensitivity else 1.0))
+    _estimate(wr.size * ar.size, kind, yes, per_cell=cell_seconds(kind) * (SENSITIVITY_COST if sensitivity else 1.0))
     ck = Path(f"{out}.checkpoint") if checkpoint else None
     t0 = time.perf_counter()
     from ..analyses.spectra import overturning_spectrum
@@ -407,7 +407,7 @@ def sweep(
         _estimate(sw.size, model.value, yes, what="record runs", per_cell=per_run)
     else:
         kind = "spring-ga" if (model == ModelKind.spring and tol is not None) else model.value
-        _estimate(sw.size, kind, yes, what="scenes", per_cell=CELL_SECONDS[kind] * dearer)
+        _estimate(sw.size, kind, yes, what="scenes", per_cell=cell_seconds(kind) * dearer)
     client = None
     if scheduler is not None:
         try:

@@ -91,6 +91,12 @@ def _duration(seconds: float) -> str:
 SENSITIVITY_COST = 2.0  # a run with its tangent against one without (benchmarks/study_uncertain.py: 1.4x records, 2.3x pulses)
 
 
+def cell_seconds(kind: str) -> float:
+    """The estimated cost of one pulse cell of a model of `kind` (`CELL_SECONDS`; a kind registered
+    since, unmeasured: the dearest built-in kind's)."""
+    return CELL_SECONDS.get(kind, max(CELL_SECONDS.values()))
+
+
 def record_run_seconds(kind: str, seconds: float) -> float:
     """The estimated cost of one run of a `seconds`-long record with a model of `kind`."""
     return RECORD_RUN_SECONDS.get(kind, RECORD_RUN_SECONDS["spring-flexible"]) * seconds / 40.0  # a registered kind: the dearest
@@ -98,8 +104,8 @@ def record_run_seconds(kind: str, seconds: float) -> float:
 
 def _estimate(n_cells: int, kind: str, yes: bool, what: str = "cells", per_cell: float | None = None) -> None:
     """Refuse (exit 2) a run estimated beyond an hour or 2 GB unless --yes; announce one over a
-    minute. `kind` keys CELL_SECONDS; `per_cell` [s] overrides its cost."""
-    cost = CELL_SECONDS[kind] if per_cell is None else per_cell
+    minute. `kind`'s cost per cell is `cell_seconds(kind)`; `per_cell` [s] overrides it."""
+    cost = cell_seconds(kind) if per_cell is None else per_cell
     seconds = n_cells * cost
     mem = n_cells * CELL_BYTES
     est = (f"{n_cells:,} {what}: about {_duration(seconds)} and {mem / 1e9:.2g} GB "
