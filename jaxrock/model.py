@@ -14,6 +14,7 @@ call those methods. A model kind that scenes files name is registered with `regi
 from __future__ import annotations
 
 import abc
+import inspect
 from typing import NamedTuple
 
 import diffrax
@@ -413,8 +414,13 @@ def scene_arguments(model: AbstractModel, excitation: AbstractExcitation, *, int
             raise JaxrockInputError(f"save times reach {float(jnp.max(save.ts)):g} s, beyond t1 = {float(t1):g} s")
     if t1 is not None and is_concrete((t1, excitation)):
         check_range("t1 (end time) [s]", t1, float(excitation.t_start), float("inf"), lo_open=True, hi_open=True)
-    if integrator is None:  # under jax.grad the default's reverse-mode form (the same settings, the same values)
-        integrator = model.default_integrator("reverse" if _in_reverse_mode() else None)
+    if integrator is None:
+        integrator = model.default_integrator()
+        # under jax.grad a forward-mode default (the flexible column's) gives way to its reverse-mode
+        # form, the same settings and values, where the model offers one (`autodiff`)
+        if (_in_reverse_mode() and "autodiff" in inspect.signature(model.default_integrator).parameters
+                and not _checkpointed(model, excitation, integrator, save, t1)):
+            integrator = model.default_integrator(autodiff="reverse")
     return model, excitation, integrator, save, t1
 
 
