@@ -36,7 +36,7 @@ _EXPORTS = {
     **dict.fromkeys(["SUMMARY", "Output"], "outputs"),
     **dict.fromkeys(["AbstractIntegrator", "AbstractModel", "AbstractStepper", "AbstractSpringIntegrator", "Schedule", "simulate"],
                     "model"),
-    **dict.fromkeys(["ModelKind", "register_model_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"], "scene"),
+    **dict.fromkeys(["ModelKind", "Param", "register_model_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"], "scene"),
     **dict.fromkeys(["Sensitivity", "verdict_uncertain"], "sensitivity"),
     **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
     **dict.fromkeys(["SpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear",
@@ -70,8 +70,8 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
         AbstractSpringIntegrator as AbstractSpringIntegrator, Schedule as Schedule, simulate as simulate,
     )
     from .scene import (
-        ModelKind as ModelKind, register_model_kind as register_model_kind, DEFAULT_SMOOTHING as DEFAULT_SMOOTHING,
-        DEFAULT_BACKBONE as DEFAULT_BACKBONE,
+        ModelKind as ModelKind, Param as Param, register_model_kind as register_model_kind,
+        DEFAULT_SMOOTHING as DEFAULT_SMOOTHING, DEFAULT_BACKBONE as DEFAULT_BACKBONE,
     )
     from .sensitivity import Sensitivity as Sensitivity, verdict_uncertain as verdict_uncertain
     from .rigid import EventIntegrator as EventIntegrator, RigidModel as RigidModel

@@ -36,18 +36,70 @@ def _resolve(module: str, name: str):
     return getattr(importlib.import_module(module), name)
 
 
+# -- model parameters ------------------------------------------------------------------------------
+class Param(NamedTuple):
+    """A numeric model parameter, declared once (issue 57): a scenes file's column and the model
+    builder's keyword (`name`); what it means (`meaning`, for tables and help; `long_name`, ASCII,
+    for stores) and its unit (`unit` as people write it, "–" for none; `units`, CF); its valid range
+    [lo, hi] (open ends where `lo_open`, `hi_open`); its default (None: the model computes it,
+    `default_text` says how) and, for a damping parameter, the value that dissipates nothing
+    (`undamped`). The command line's help, the scenes file's table, the sweep's quantities and
+    `UNDAMPED` are generated from it."""
+
+    name: str
+    meaning: str
+    unit: str
+    lo: float
+    hi: float
+    lo_open: bool = False
+    hi_open: bool = False
+    default: float | None = None
+    default_text: str = ""
+    undamped: float | None = None
+    long_name: str = ""
+    units: str = "1"
+
+    def check(self, x) -> None:
+        """Refuse, in one line, a value outside the valid range."""
+        check_range(self.name, x, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open)
+
+    @property
+    def range_text(self) -> str:
+        """The valid range as a table writes it ("[0, 1]", "≥ 0", "> 0")."""
+        if math.isinf(self.hi):
+            return f"{'>' if self.lo_open else '≥'} {self.lo:g}"
+        return f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}{')' if self.hi_open else ']'}"
+
+    @property
+    def range(self) -> tuple[float, float, bool, bool]:
+        return self.lo, self.hi, self.lo_open, self.hi_open
+
+
+# the built-in models' parameters (paper: η eq. 5, c̄ eq. 17; the concrete column of sections 4–6)
+ETA = Param("eta", "rigid impact velocity ratio (1: undamped)", "–", 0.0, 1.0, default_text="1 − 1.5 sin²α′", undamped=1.0,
+            long_name="rigid impact velocity ratio")
+CBAR = Param("cbar", "spring-model damper c̄ (0: undamped)", "–", 0.0, math.inf, hi_open=True, default_text="eq. 17", undamped=0.0,
+             long_name="spring-model damper cbar")
+E_COLUMN = Param("E", "Young's modulus of the column", "Pa", 0.0, math.inf, True, True, default=30e9, units="Pa")
+RHO_COLUMN = Param("rho", "density of the column", "kg/m³", 0.0, math.inf, True, True, default=2500.0, units="kg m-3")
+ZETA_COLUMN = Param("zeta", "column damping ratio, first fixed-base mode", "–", 0.0, math.inf, hi_open=True, default=0.01,
+                    long_name="column damping ratio")
+
+
 # -- model kinds -----------------------------------------------------------------------------------
 class ModelKind(NamedTuple):
     """A model kind that scenes files name (`jaxrock.io.scenes_file`'s `model` column, the CLI's `--model`):
     `build(block, **parameters)` makes the model of one scene (traceable: batches vmap it), from the
     scene's `Block` and the values of its `parameters` (batch columns, e.g. `eta`, `cbar`, `E`; a
     parameter left out is not passed, so the builder's default applies). `build` may be named as
-    "module:function", imported when a model is first made (the built-in kinds are)."""
+    "module:function", imported when a model is first made (the built-in kinds are). `params`: the
+    numeric ones' declarations (`Param`), by name."""
 
     name: str
     build: Callable | str  # (jaxrock.Block, **parameters) → a jaxrock model
     parameters: tuple[str, ...] = ()
     description: str = ""
+    params: dict = {}
 
     def model(self, block, **parameters):
         """The model of one scene: `build(block, **parameters)`."""
@@ -58,22 +110,38 @@ class ModelKind(NamedTuple):
 MODEL_KINDS: dict[str, ModelKind] = {}
 
 
-def register_model_kind(name: str, build: Callable | str, parameters: tuple[str, ...] = (), description: str = "") -> ModelKind:
-    """Make a model kind nameable in scenes files (`jaxrock.io.scenes_file`) and the command line."""
+def register_model_kind(name: str, build: Callable | str, parameters: tuple[str | Param, ...] = (), description: str = "") -> ModelKind:
+    """Make a model kind nameable in scenes files (`jaxrock.io.scenes_file`) and the command line.
+    `parameters`: its numeric parameters as `Param`s (a built-in one, e.g. `ZETA_COLUMN`, or its
+    own), its other options (`backbone`, `smoothing`) by name."""
     if not name or name != name.lower() or "," in name:
         raise JaxrockInputError(f"model kind {name!r}: a lower-case name without commas")
-    MODEL_KINDS[name] = kind = ModelKind(name, build, tuple(parameters), description)
+    params = {p.name: p for p in parameters if isinstance(p, Param)}
+    names = tuple(p.name if isinstance(p, Param) else p for p in parameters)
+    MODEL_KINDS[name] = kind = ModelKind(name, build, names, description, params)
     return kind
 
 
-register_model_kind("rigid", "jaxrock.rigid.model:scenes_file_model", ("eta",), "Housner's rigid block (RM)")
-register_model_kind("spring", "jaxrock.spring.model:quasi_rigid_scene", ("cbar", "backbone", "smoothing"),
+register_model_kind("rigid", "jaxrock.rigid.model:scenes_file_model", (ETA,), "Housner's rigid block (RM)")
+register_model_kind("spring", "jaxrock.spring.model:quasi_rigid_scene", (CBAR, "backbone", "smoothing"),
                     "quasi-rigid spring model (SM), added masses")
-register_model_kind("spring-flexible", "jaxrock.spring.model:flexible_scene", ("cbar", "E", "rho", "zeta", "backbone", "smoothing"),
+register_model_kind("spring-flexible", "jaxrock.spring.model:flexible_scene", (CBAR, E_COLUMN, RHO_COLUMN, ZETA_COLUMN, "backbone", "smoothing"),
                     "spring model with an elastic column (concrete by default)")
 DEFAULT_MODEL = "rigid"
-UNDAMPED = {"eta": 1.0, "cbar": 0.0}  # a damping parameter's value that dissipates nothing
-MODEL_PARAMETERS = ("eta", "cbar", "E", "rho", "zeta")  # the numeric model parameters (scenes files' columns, lower-cased)
+
+
+def model_params() -> dict[str, Param]:
+    """Every numeric model parameter of the registered kinds, by name (a name two kinds declare:
+    the first kind's declaration)."""
+    out: dict[str, Param] = {}
+    for kind in MODEL_KINDS.values():
+        for p in kind.params.values():
+            out.setdefault(p.name, p)
+    return out
+
+
+MODEL_PARAMETERS = tuple(model_params())  # the built-in kinds' numeric parameters (scenes files' columns, lower-cased)
+UNDAMPED = {p.name: p.undamped for p in model_params().values() if p.undamped is not None}  # the value that dissipates nothing
 
 
 def model_kinds() -> tuple[str, ...]:
@@ -173,9 +241,9 @@ AXES = {"accel_ratio": "a_p/(g tan alpha)", "omega_ratio": "omega_p/p"}
 
 
 # -- concrete defaults -----------------------------------------------------------------------------
-CONCRETE_E = 30e9  # Pa
-CONCRETE_RHO = 2500.0  # kg/m³
-CONCRETE_ZETA = 0.01  # column damping ratio at its first fixed-base mode
+CONCRETE_E = E_COLUMN.default  # Pa
+CONCRETE_RHO = RHO_COLUMN.default  # kg/m³
+CONCRETE_ZETA = ZETA_COLUMN.default  # column damping ratio at its first fixed-base mode
 
 
 # -- the scene's parameters ------------------------------------------------------------------------
@@ -212,11 +280,8 @@ def parameters() -> tuple[Parameter, ...]:
         Parameter("omega_p", "rad/s", "pulse frequency", "> 0; pulses: give it or `omega_ratio`"),
         Parameter("omega_ratio", "–", AXES["omega_ratio"].replace("omega", "ω") + "′", "> 0"),
         Parameter("scale", "–", "factor on a record", "≥ 0, default 1 (records only)"),
-        Parameter("eta", "–", "rigid impact velocity ratio (1: undamped)", f"[0, 1], default 1 − 1.5 sin²α′ ({_kinds(takes('eta'))})"),
-        Parameter("cbar", "–", "spring-model damper c̄ (0: undamped)", f"≥ 0, default eq. 17 ({_kinds(takes('cbar'))})"),
-        Parameter("E", "Pa", "Young's modulus of the column", f"> 0, default {CONCRETE_E:g} ({_kinds(takes('E'))})"),
-        Parameter("rho", "kg/m³", "density of the column", f"> 0, default {CONCRETE_RHO:g} ({_kinds(takes('rho'))})"),
-        Parameter("zeta", "–", "column damping ratio, first fixed-base mode", f"≥ 0, default {CONCRETE_ZETA:g} ({_kinds(takes('zeta'))})"),
+        *(Parameter(p.name, p.unit, p.meaning, f"{p.range_text}, default {p.default_text or format(p.default, 'g')} "
+                    f"({_kinds(takes(p.name))})") for p in model_params().values()),
     )
 
 
@@ -243,11 +308,7 @@ SWEEP_QUANTITIES = {
     "height": ("full height 2h", "m", (0.0, math.inf, True, True)),
     "tan_alpha": ("slenderness tan(alpha) = b/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
     "tan_alpha_base": ("extended base slenderness tan(alpha') = b'/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
-    "eta": ("rigid impact velocity ratio", "1", (0.0, 1.0, False, False)),
-    "cbar": ("spring-model damper cbar", "1", (0.0, math.inf, False, True)),
-    "E": ("Young's modulus of the column", "Pa", (0.0, math.inf, True, True)),
-    "rho": ("density of the column", "kg m-3", (0.0, math.inf, True, True)),
-    "zeta": ("column damping ratio", "1", (0.0, math.inf, False, True)),
+    **{p.name: (p.long_name or p.meaning, p.units, p.range) for p in model_params().values()},
     "smoothing": ("spring pre-yield rotation theta_s/alpha'", "1", (0.0, 1.0, True, True)),
     "scale": ("record scale factor", "1", (0.0, math.inf, False, True)),
     "accel_ratio": ("a_p/(g tan alpha')", "1", (0.0, math.inf, True, True)),

@@ -154,9 +154,11 @@ OSC = Oscillator(BLOCK, zeta=jnp.asarray(0.05))
 
 @pytest.fixture
 def oscillator_kind():
-    """The oscillator as a scenes-file model kind (`zeta` its one parameter), for this test only."""
+    """The oscillator as a scenes-file model kind, for this test only: `zeta` its one parameter,
+    declared with its own meaning, range and default (not the concrete column's)."""
     build = lambda block, zeta=0.05: Oscillator(block, zeta=jnp.asarray(zeta, dtype=float))
-    yield jr.register_model_kind("oscillator", build, ("zeta",), "a linear oscillator (test)")
+    zeta = jr.Param("zeta", "oscillator damping ratio", "–", 0.0, 2.0, default=0.05)
+    yield jr.register_model_kind("oscillator", build, (zeta,), "a linear oscillator (test)")
     MODEL_KINDS.pop("oscillator")
 
 
@@ -198,7 +200,9 @@ def test_spectrum_of_the_newcomer_equals_simulate_cell_by_cell():
 
 def test_run_scenes_runs_the_registered_newcomer(tmp_path, oscillator_kind):
     """A scenes file names the registered kind; its `zeta` column reaches the model (an empty cell:
-    the column's default, 0.01); a rigid-only column on an oscillator row is refused in one line."""
+    the oscillator's own default, 0.05; before the parameters were declared per kind, the concrete
+    column's 0.01), checked against the oscillator's own range ([0, 2]: 3 is refused, though the
+    column's zeta takes it); a rigid-only column on an oscillator row is refused in one line."""
     scenes = tmp_path / "scenes.csv"
     rows = [(10.0, 0.2, 0.5, 1.0, ""), (10.0, 0.2, 2.0, 1.0, "0.2"), (5.0, 0.15, 0.9, 3.0, "")]
     scenes.write_text("height,tan_alpha,model,accel_ratio,omega_ratio,zeta\n"
@@ -208,13 +212,16 @@ def test_run_scenes_runs_the_registered_newcomer(tmp_path, oscillator_kind):
     got = list(csv.DictReader(open(tmp_path / "out.csv")))
     for (h, t, a, w, z), rec in zip(rows, got):
         blk = jr.Block.from_slenderness(h, t)
-        model = Oscillator(blk, zeta=jnp.asarray(float(z) if z else 0.01))
+        model = Oscillator(blk, zeta=jnp.asarray(float(z) if z else 0.05))
         sol = jr.simulate(model, jr.RickerPulse(a * float(blk.uplift_acceleration), w * float(blk.p_r)))
         assert abs(float(rec["max_theta"]) - float(sol.max_theta)) <= 1e-12
         assert rec["overturned"] == str(int(bool(sol.overturned)))
     bad = tmp_path / "bad.csv"
     bad.write_text("height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,oscillator,1,1,0.9\n")
     with pytest.raises(jr.JaxrockInputError, match="eta.*applies only to model rigid"):
+        jr.run_scenes(bad, tmp_path / "bad_out.csv", progress=False)
+    bad.write_text("height,tan_alpha,model,accel_ratio,omega_ratio,zeta\n10,0.2,oscillator,1,1,3\n")
+    with pytest.raises(jr.JaxrockInputError, match=r"zeta.*valid range \[0, 2\]"):
         jr.run_scenes(bad, tmp_path / "bad_out.csv", progress=False)
 
 

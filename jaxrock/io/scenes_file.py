@@ -58,8 +58,8 @@ import numpy as np
 from .._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
 from ..excitation import Record
 from ..geometry import G, Block, pulse_of_ratios
-from ..scene import (CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA, DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, MODEL_PARAMETERS, PULSES,
-                     RECORD_ALIASES, TAN_ALPHA_MIN, builtin_record_names, is_builtin_record, model_kinds, parameter_table, parameters, pulse_class, takes)
+from ..scene import (DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, PULSES, RECORD_ALIASES, TAN_ALPHA_MIN, builtin_record_names,
+                     is_builtin_record, model_kinds, model_params, parameter_table, parameters, pulse_class, takes)
 from ..results import RESULT_COLUMNS, summary_doc
 from .tables import csv_text
 
@@ -205,7 +205,7 @@ class Scenes:
         """The stacked models of rows `idx` (all of model kind `kind`)."""
         p = {k: jnp.asarray(v[idx]) for k, v in self.params.items()}
         block = jax.vmap(Block.from_slenderness)(p["height"], p["tan_alpha"], p["tan_alpha_base"])
-        takes = {k: p[k] for k in MODEL_KINDS[kind].parameters if k in MODEL_PARAMETERS}
+        takes = {k: p[k] for k in MODEL_KINDS[kind].parameters if k in model_params()}
         return jax.vmap(lambda b, kw: scene_model(kind, b, **kw))(block, takes)
 
     def intensity(self, idx) -> np.ndarray:
@@ -237,7 +237,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     everyone = np.ones(t.n, bool)
     kind = np.char.lower(t.text("model", DEFAULT_MODEL).astype(str))
     t.fail(~np.isin(kind, model_kinds()), "model", lambda i: f"{t.cells['model'][i]!r}; valid: {', '.join(model_kinds())}")
-    for name in MODEL_PARAMETERS:
+    for name in model_params():
         col, kinds = name.lower(), takes(name)
         t.fail(t.has(col) & ~np.isin(kind, kinds), col, lambda i: f"applies only to model {' / '.join(kinds)}, not {kind[i]}")
 
@@ -257,20 +257,22 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     blocks = jax.vmap(Block.from_slenderness)(jnp.asarray(height), jnp.asarray(tan_a), jnp.asarray(tan_b))
     t.fail(_invalid_lanes(blocks), None, lambda i: _refusal(lambda: Block.from_slenderness(height[i], tan_a[i], tan_b[i])))
 
-    eta = t.num("eta", 0.0, 1.0)
-    cbar = t.num("cbar", 0.0, math.inf, hi_open=True)
-    E = t.num("e", 0.0, math.inf, lo_open=True, hi_open=True)
-    rho = t.num("rho", 0.0, math.inf, lo_open=True, hi_open=True)
-    zeta = t.num("zeta", 0.0, math.inf, hi_open=True)
     from ..spring import Column, cbar_eq17
 
-    params = {
-        "height": height, "tan_alpha": tan_a, "tan_alpha_base": tan_b,
-        "eta": np.where(np.isnan(eta), np.asarray(blocks.eta_r), eta),
-        "cbar": np.where(np.isnan(cbar), np.asarray(cbar_eq17(blocks.alpha_r)), cbar),
-        "E": np.where(np.isnan(E), CONCRETE_E, E), "rho": np.where(np.isnan(rho), CONCRETE_RHO, rho),
-        "zeta": np.where(np.isnan(zeta), CONCRETE_ZETA, zeta),
-    }
+    params = {"height": height, "tan_alpha": tan_a, "tan_alpha_base": tan_b}
+    # the model parameters as each row's kind declares them (`jaxrock.scene.Param`): its range, its
+    # default (computed by the model where it declares none: η eq. 5, c̄ eq. 17)
+    computed = {"eta": lambda: np.asarray(blocks.eta_r), "cbar": lambda: np.asarray(cbar_eq17(blocks.alpha_r))}
+    for name, shared in model_params().items():
+        value = np.full(t.n, np.nan)
+        for k in takes(name):
+            rows = kind == k
+            p = MODEL_KINDS[k].params.get(name, shared)
+            x = t.num(name.lower(), p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open, rows=rows)
+            default = p.default if p.default is not None else computed[name]() if name in computed else np.nan
+            value = np.where(rows, np.where(np.isnan(x), default, x), value)
+            t.fail(rows & np.isnan(value), name.lower(), f"missing: {p.meaning} is required for model {k} (no default)")
+        params[name] = np.where(np.isnan(value), shared.default if shared.default is not None else 0.0, value)
     flexible = np.isin(kind, takes("E"))  # rows whose column's material is checked
     columns = jax.vmap(Column)(jnp.asarray(params["E"]), jnp.asarray(params["rho"]))
     t.fail(flexible & _invalid_lanes(columns), None, lambda i: _refusal(lambda: Column(params["E"][i], params["rho"][i])))
