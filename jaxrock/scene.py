@@ -301,16 +301,18 @@ def parameter_help(name: str, valid: bool = True) -> str:
 
 
 # -- sweeps ----------------------------------------------------------------------------------------
-# what a sweep (`jaxrock.analyses.sweep`) can vary, in its store's dimension order (outermost first):
-# quantity → (long name, units, valid range (lo, hi, lo_open, hi_open); None for the record names)
-SWEEP_QUANTITIES = {
-    "record": ("ground-motion record", "", None),
-    "height": ("full height 2h", "m", (0.0, math.inf, True, True)),
-    "tan_alpha": ("slenderness tan(alpha) = b/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
-    "tan_alpha_base": ("extended base slenderness tan(alpha') = b'/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
-    **{p.name: (p.long_name or p.meaning, p.units, p.range) for p in model_params().values()},
-    "smoothing": ("spring pre-yield rotation theta_s/alpha'", "1", (0.0, 1.0, True, True)),
-    "scale": ("record scale factor", "1", (0.0, math.inf, False, True)),
-    "accel_ratio": ("a_p/(g tan alpha')", "1", (0.0, math.inf, True, True)),
-    "omega_ratio": ("omega_p/p'", "1", (0.0, math.inf, True, True)),
-}
+def sweep_quantities() -> dict[str, tuple]:
+    """What a sweep can vary, in its store's dimension order (outermost first): quantity → (long
+    name, units, valid range (lo, hi, lo_open, hi_open); None for the record names). The model
+    parameters are the registered kinds' (`model_params`), a kind registered since included."""
+    return {
+        "record": ("ground-motion record", "", None),
+        "height": ("full height 2h", "m", (0.0, math.inf, True, True)),
+        "tan_alpha": ("slenderness tan(alpha) = b/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
+        "tan_alpha_base": ("extended base slenderness tan(alpha') = b'/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
+        **{p.name: (p.long_name or p.meaning, p.units, p.range) for p in model_params().values()},
+        "smoothing": ("spring pre-yield rotation theta_s/alpha'", "1", (0.0, 1.0, True, True)),
+        "scale": ("record scale factor", "1", (0.0, math.inf, False, True)),
+        "accel_ratio": ("a_p/(g tan alpha')", "1", (0.0, math.inf, True, True)),
+        "omega_ratio": ("omega_p/p'", "1", (0.0, math.inf, True, True)),
+    }

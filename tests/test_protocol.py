@@ -234,3 +234,24 @@ def test_a_model_refuses_an_integrator_it_cannot_run(model, integrator, needs):
     """While tracing, before any compilation: one line naming what the model needs."""
     with pytest.raises(jr.JaxrockInputError, match=needs):
         jr.simulate(model, jr.RickerPulse(3.0, 6.0), integrator=integrator)
+
+
+def test_a_sweep_varies_the_newcomers_own_parameter(oscillator_kind):
+    """The oscillator's own `zeta` (declared with `jaxrock.Param`: range [0, 2], default 0.05) is a
+    sweep quantity: a sweep over it runs each scene as `simulate` does with that damping (more
+    damping, less rotation), 3 is refused against the oscillator's own range, and a value the
+    column's zeta would take but the rigid model does not is refused for `rigid`."""
+    from jaxrock.analyses.sweep import Sweep, run_chunk
+
+    zetas = np.array([0.02, 0.3])
+    sw = Sweep.make("oscillator", height=10.0, tan_alpha=0.2, zeta=zetas, accel_ratio=0.6, omega_ratio=1.0)
+    assert sw.axes["zeta"].tolist() == zetas.tolist()
+    got = run_chunk(sw, 0)["max_theta"].ravel()
+    for z, value in zip(zetas, got):
+        sol = jr.simulate(Oscillator(BLOCK, zeta=jnp.asarray(z)), jr.RickerPulse(0.6 * float(BLOCK.uplift_acceleration), float(BLOCK.p_r)))
+        assert abs(value - float(sol.max_theta)) <= 1e-12
+    assert got[1] < got[0]
+    with pytest.raises(jr.JaxrockInputError, match=r"zeta.*\[0, 2\]"):
+        Sweep.make("oscillator", zeta=[0.1, 3.0], accel_ratio=0.6, omega_ratio=1.0)
+    with pytest.raises(jr.JaxrockInputError, match="zeta applies to model spring-flexible / oscillator only, not rigid"):
+        Sweep.make("rigid", zeta=[0.1], accel_ratio=0.6, omega_ratio=1.0)

@@ -57,7 +57,7 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
     if not 0 <= int(refine) <= MAX_REFINE:
         raise JaxrockInputError(f"refine = {refine}; valid: an integer in [0, {MAX_REFINE}] (each bisection halves the bracket)")
     check_grid("scale (record factors)", sweep.axes["scale"])  # the least factor is the first of them that overturns
-    assert sweep.dims[0] == "record" and sweep.dims[-1] == "scale"  # AXIS_ORDER: records outermost, scale innermost
+    assert sweep.dims[0] == "record" and sweep.dims[-1] == "scale"  # axis_order(): records outermost, scale innermost
     ds = run_sweep(sweep, store, progress=progress, devices=devices, history=history).drop_vars("chunk_done")
     sc = sweep.axes["scale"]
     over, status = ds.overturned.values, ds.status.values  # (record, *cells, scale)

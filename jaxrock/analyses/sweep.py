@@ -3,7 +3,7 @@
 A `Sweep` is a value: one model kind, and for each scene quantity either one value or an axis of
 values — the spectra's axes a_p/(g tanα′) and ω_p/p′ (Ricker pulses), or records and their scale
 factor; the column's size 2h, slenderness tanα and base tanα′; the model parameters η, c̄, E, ρ, ζ
-and the spring's smoothing θs/α′. The product of its axes (in the order of `AXIS_ORDER`: records
+and the spring's smoothing θs/α′. The product of its axes (in the order of `axis_order()`: records
 and model axes outside, excitation axes inside) is split into `chunks` of at most `chunk_size`
 scenes, each a hyper-rectangle of the grid (every record in its own chunks: records differ in
 length). `run_chunk` runs one chunk through the batch engine (`jaxrock.analyses.engine`: the
@@ -32,12 +32,22 @@ import numpy as np
 
 from .._validate import JaxrockInputError, check_range
 from ..outputs import OUTPUTS
-from ..scene import DEFAULT_PULSE, MODEL_KINDS, PULSES, SWEEP_QUANTITIES, model_kinds, takes
+from ..scene import DEFAULT_PULSE, MODEL_KINDS, PULSES, model_kinds, model_params, sweep_quantities, takes
 from .engine import batch_limit, make_stepper, on_devices, run_batch
 
-QUANTITIES = SWEEP_QUANTITIES
-AXIS_ORDER = tuple(QUANTITIES)  # a store's dimensions, outermost first
-MODEL_QUANTITIES = ("height", "tan_alpha", "tan_alpha_base", "eta", "cbar", "E", "rho", "zeta", "smoothing")
+
+
+def axis_order() -> tuple[str, ...]:
+    """A store's dimensions, outermost first (`jaxrock.scene.sweep_quantities`)."""
+    return tuple(sweep_quantities())
+
+
+def model_quantities() -> tuple[str, ...]:
+    """The quantities that make a scene's model: the block's geometry (first three), the registered
+    kinds' numeric parameters (`jaxrock.scene.model_params`), the spring's smoothing."""
+    return ("height", "tan_alpha", "tan_alpha_base", *model_params(), "smoothing")
+
+
 PULSE_QUANTITIES = ("accel_ratio", "omega_ratio")
 DEFAULTS = {"height": 10.0, "tan_alpha": 0.2}  # the rest: the model kind's own defaults
 
@@ -48,7 +58,7 @@ class Sweep:
 
     - `model`: a model kind (`jaxrock.scene.model_kinds()`), or a model value (`overturning_spectrum`
       runs one); `backbone` the spring backbone name of a spring kind (None: the default);
-    - `axes`: quantity → values (at least one), in `AXIS_ORDER`; `fixed`: quantity → one value;
+    - `axes`: quantity → values (at least one), in `axis_order()`; `fixed`: quantity → one value;
     - `pulse`: the Ricker pulse kind or class (pulse sweeps), or None with `records` (record sweeps:
       `axes["record"]` holds their names);
     - `integrator`: None (the model's default) or an integrator;
@@ -71,7 +81,7 @@ class Sweep:
     @classmethod
     def make(cls, model="rigid", *, pulse=None, records=None, backbone: str | None = None,
              integrator=None, chunk_size: int = 1024, sensitivity: bool = False, **quantities) -> "Sweep":
-        """A checked sweep: each keyword of `QUANTITIES` is one number (fixed) or a sequence (an
+        """A checked sweep: each keyword of `jaxrock.scene.sweep_quantities()` is one number (fixed) or a sequence (an
         axis). Pulse sweeps take `accel_ratio` and `omega_ratio` (both required; `pulse` a pulse
         kind's name or class); record sweeps take `records` (a `jaxrock.Record` or a sequence of
         them) and `scale` (default 1). `model` is a model kind, or a model (a value: every scene
@@ -80,21 +90,22 @@ class Sweep:
         from ..model import AbstractModel
 
         if isinstance(model, AbstractModel):
-            varied = sorted(set(quantities) & set(MODEL_QUANTITIES[1:])) + (["backbone"] if backbone is not None else [])
+            varied = sorted(set(quantities) & set(model_quantities()[1:])) + (["backbone"] if backbone is not None else [])
             if varied:
                 raise JaxrockInputError(f"{', '.join(varied)}: set by the model given (of which only the height may vary); "
                                         "name a model kind to vary them")
         elif model not in MODEL_KINDS:
             raise JaxrockInputError(f"model = {model!r}; valid: {', '.join(model_kinds())}")
-        unknown = sorted(set(quantities) - set(QUANTITIES) - {"record"})
+        known = sweep_quantities()
+        unknown = sorted(set(quantities) - set(known) - {"record"})
         if unknown or "record" in quantities:
             raise JaxrockInputError(f"{', '.join(unknown) or 'record'}: not a sweep quantity; valid: "
-                                    f"{', '.join(q for q in AXIS_ORDER if q != 'record')} (and records=...)")
+                                    f"{', '.join(q for q in known if q != 'record')} (and records=...)")
         if int(chunk_size) < 1:
             raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")
         given = {k: v for k, v in quantities.items() if v is not None}
         for name in given:
-            if name in MODEL_QUANTITIES[3:] and isinstance(model, str) and model not in takes(name):
+            if name in model_quantities()[3:] and isinstance(model, str) and model not in takes(name):
                 raise JaxrockInputError(f"{name} applies to model {' / '.join(takes(name))} only, not {model}")
         if backbone is not None and isinstance(model, str) and "backbone" not in MODEL_KINDS[model].parameters:
             raise JaxrockInputError(f"backbone applies to the spring models only, not {model}")
@@ -116,7 +127,7 @@ class Sweep:
                 raise JaxrockInputError(f"pulse = {pulse!r}; valid: {', '.join(PULSES)}")
         values = {**(DEFAULTS if isinstance(model, str) else {}), **given}
         axes, fixed = {}, {}
-        for name in AXIS_ORDER:
+        for name in known:
             if name == "record":
                 if recs:
                     axes["record"] = np.asarray([r.name for r in recs])
@@ -124,7 +135,8 @@ class Sweep:
             if name not in values:
                 continue
             v = np.asarray(values[name], dtype=float)
-            lo, hi, lo_open, hi_open = QUANTITIES[name][2]
+            own = MODEL_KINDS[model].params.get(name) if isinstance(model, str) else None  # the kind's own declaration
+            lo, hi, lo_open, hi_open = own.range if own is not None else known[name][2]
             if v.ndim > 1 or v.size == 0:
                 raise JaxrockInputError(f"{name}: one number or a 1-D sequence of numbers, got shape {v.shape}")
             check_range(name, v, lo, hi, lo_open=lo_open, hi_open=hi_open)
@@ -143,7 +155,7 @@ class Sweep:
         E ∈ [1e6, 1e15] Pa): the model of the first scene built with each axis's least and
         greatest value (the limits are intervals)."""
         first = {k: v[:1] for k, v in self.chunk_values(0).items()}
-        for name in (q for q in MODEL_QUANTITIES if q in self.axes):
+        for name in (q for q in model_quantities() if q in self.axes):
             for value in (np.min(self.axes[name]), np.max(self.axes[name])):
                 self._models({**first, name: np.asarray([value])}, batched=False)
 
@@ -359,7 +371,7 @@ def run_values(sweep: Sweep, v: dict[str, np.ndarray], devices=None) -> dict[str
 
     from ..results import status_codes
 
-    batched = any(np.unique(v[q]).size > 1 for q in MODEL_QUANTITIES if q in v)
+    batched = any(np.unique(v[q]).size > 1 for q in model_quantities() if q in v)
     model = sweep._models(v, batched)
     exc = sweep._excitations(v, model, batched)
     n, limit = len(next(iter(v.values()))), sweep.batch_limit
@@ -490,4 +502,4 @@ def _run_on_cluster(client, path: str, sweep: Sweep, todo: Iterable[int], finish
         client.cancel(futures)
 
 
-__all__ = ["Sweep", "run_chunk", "run_sweep", "run_values", "QUANTITIES", "AXIS_ORDER"]
+__all__ = ["Sweep", "run_chunk", "run_sweep", "run_values", "axis_order", "model_quantities"]

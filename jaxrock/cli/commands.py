@@ -357,7 +357,7 @@ def sweep(
     parameters) into a chunked Zarr store: resumable, a chunk per local device at a time, or spread
     over a Dask cluster."""
     from .._validate import JaxrockInputError, check_writable
-    from ..scene import takes
+    from ..scene import model_params, takes
 
     _check_count("--chunk-size", chunk_size)
     if devices is not None:
@@ -370,7 +370,7 @@ def sweep(
         if text is None:
             continue
         flag = "--" + (name if name == "E" else name.replace("_", "-"))
-        if name in ("eta", "cbar", "E", "rho", "zeta", "smoothing") and model.value not in takes(name):
+        if (name in model_params() or name == "smoothing") and model.value not in takes(name):
             raise JaxrockInputError(f"{flag} applies to --model {' / '.join(takes(name))} only, not {model.value}")
         v = parse_values(flag, text)
         given[name] = float(v[0]) if v.size == 1 else v

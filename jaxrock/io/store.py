@@ -53,11 +53,12 @@ def _variables() -> dict[str, tuple[np.dtype, object, dict]]:
 
 
 def _coordinates(sweep) -> dict:
-    from ..scene import SWEEP_QUANTITIES
+    from ..scene import sweep_quantities
 
+    known = sweep_quantities()
     coords = {}
     for name, values in sweep.axes.items():
-        long_name, units, _ = SWEEP_QUANTITIES[name]
+        long_name, units, _ = known[name]
         data = np.asarray(values, dtype=object) if name == "record" else np.asarray(values, dtype=float)  # object: a Zarr v3 string
         coords[name] = (name, data, {"long_name": long_name, **({"units": units} if units else {})})
     return coords
