@@ -28,7 +28,7 @@ from ._validate import JaxrockInputError, Limit, check_one_scene, check_range, i
 from .excitation import AbstractExcitation
 from .geometry import Block
 from .results import OUTPUTS, Save, Solution, Status
-from .scene import CONCRETE_E, CONCRETE_RHO, CONCRETE_ZETA
+from .scene import model_params
 
 
 AUTODIFF_MODES = ("reverse", "forward")
@@ -447,20 +447,27 @@ def guard_scene(model: AbstractModel, excitation: AbstractExcitation):
 
 # A valid, quiet scene (2h = 10 m, tanα = 0.2 at rest under 1 m/s², below its uplift at 1.96 m/s²):
 # the values an invalid lane runs instead of its own, by leaf name, so that NaN or negative sizes
-# never reach a loop (they ran it to its iteration bound).
-_NEUTRAL = {"h": 5.0, "b": 1.0, "b_base": 1.0, "eta": 0.9, "threshold": 1.0, "cbar": 0.05, "smoothing": 1e-4,
-            "zeta": CONCRETE_ZETA, "E": CONCRETE_E, "rho": CONCRETE_RHO, "A": 2.0, "I": 2.0 / 3.0, "a_p": 1.0, "omega_p": 6.0,
-            "acc": 0.0, "dt": 0.01, "scale": 0.0}
+# never reach a loop (they ran it to its iteration bound). The model parameters' come from their
+# declarations (`jaxrock.scene.Param.neutral`, a registered kind's too); these are the rest.
+_NEUTRAL = {"h": 5.0, "b": 1.0, "b_base": 1.0, "threshold": 1.0, "smoothing": 1e-4, "A": 2.0, "I": 2.0 / 3.0, "a_p": 1.0,
+            "omega_p": 6.0, "acc": 0.0, "dt": 0.01, "scale": 0.0}
+
+
+def neutral_values() -> dict[str, float]:
+    """The quiet scene's value of each leaf name (`_NEUTRAL` and the registered model parameters')."""
+    params = {p.name: p.default if p.neutral is None else p.neutral for p in model_params().values()}
+    return {**{k: v for k, v in params.items() if v is not None}, **_NEUTRAL}
 
 
 def _neutral(tree, ok):
-    """`tree` where `ok`, else its leaves replaced by the quiet scene's (`_NEUTRAL`)."""
+    """`tree` where `ok`, else its leaves replaced by the quiet scene's (`neutral_values`)."""
+    values = neutral_values()
 
     def swap(path, leaf):
         name = getattr(path[-1], "name", None) if path else None
-        if name not in _NEUTRAL or not eqx.is_inexact_array(leaf):
+        if name not in values or not eqx.is_inexact_array(leaf):
             return leaf
-        return jnp.where(ok, leaf, jnp.asarray(_NEUTRAL[name], dtype=leaf.dtype))
+        return jnp.where(ok, leaf, jnp.asarray(values[name], dtype=leaf.dtype))
 
     return jax.tree_util.tree_map_with_path(swap, tree)
 

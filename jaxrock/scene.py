@@ -43,8 +43,9 @@ class Param(NamedTuple):
     for stores) and its unit (`unit` as people write it, "–" for none; `units`, CF); its valid range
     [lo, hi] (open ends where `lo_open`, `hi_open`); its default (None: the model computes it,
     `default_text` says how) and, for a damping parameter, the value that dissipates nothing
-    (`undamped`). The command line's help, the scenes file's table, the sweep's quantities and
-    `UNDAMPED` are generated from it."""
+    (`undamped`); `neutral`, the value a run puts in place of an invalid one under `vmap`
+    (`jaxrock.model.guard_scene`; None: the default). The command line's help, the scenes file's
+    table, the sweep's quantities, `UNDAMPED` and the neutral values are generated from it."""
 
     name: str
     meaning: str
@@ -58,6 +59,7 @@ class Param(NamedTuple):
     undamped: float | None = None
     long_name: str = ""
     units: str = "1"
+    neutral: float | None = None
 
     def check(self, x) -> None:
         """Refuse, in one line, a value outside the valid range."""
@@ -77,9 +79,9 @@ class Param(NamedTuple):
 
 # the built-in models' parameters (paper: η eq. 5, c̄ eq. 17; the concrete column of sections 4–6)
 ETA = Param("eta", "rigid impact velocity ratio (1: undamped)", "–", 0.0, 1.0, default_text="1 − 1.5 sin²α′", undamped=1.0,
-            long_name="rigid impact velocity ratio")
+            long_name="rigid impact velocity ratio", neutral=0.9)
 CBAR = Param("cbar", "spring-model damper c̄ (0: undamped)", "–", 0.0, math.inf, hi_open=True, default_text="eq. 17", undamped=0.0,
-             long_name="spring-model damper cbar")
+             long_name="spring-model damper cbar", neutral=0.05)
 E_COLUMN = Param("E", "Young's modulus of the column", "Pa", 0.0, math.inf, True, True, default=30e9, units="Pa")
 RHO_COLUMN = Param("rho", "density of the column", "kg/m³", 0.0, math.inf, True, True, default=2500.0, units="kg m-3")
 ZETA_COLUMN = Param("zeta", "column damping ratio, first fixed-base mode", "–", 0.0, math.inf, hi_open=True, default=0.01,
