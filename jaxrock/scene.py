@@ -61,10 +61,6 @@ class Param(NamedTuple):
     units: str = "1"
     neutral: float | None = None
 
-    def check(self, x) -> None:
-        """Refuse, in one line, a value outside the valid range."""
-        check_range(self.name, x, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open)
-
     @property
     def range_text(self) -> str:
         """The valid range as a table writes it ("[0, 1]", "≥ 0", "> 0")."""
