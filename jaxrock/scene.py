@@ -5,8 +5,9 @@ It imports no JAX (the bottom of the layers): the command line builds its help a
 arguments from it before JAX is loaded, and the classes it names are imported when first used.
 
 - Model kinds: the registry `MODEL_KINDS` (`model_kinds()`: rigid, spring, spring-flexible, and
-  any kind registered since with `register_model_kind`); `DEFAULT_MODEL`; `UNDAMPED`, the value of
-  each damping parameter that dissipates nothing; `MODEL_PARAMETERS`, the numeric model parameters.
+  any kind registered since with `register_model_kind`); `DEFAULT_MODEL`; each kind's numeric
+  parameters declared as `Param`s (`model_params()`: all of them); `UNDAMPED`, the value of each
+  damping parameter that dissipates nothing.
 - Pulse kinds: `PULSES` (name → excitation class of `jaxrock.excitation`, `pulse_class`); a new
   pulse kind is a class there and a line here. `DEFAULT_PULSE`.
 - Records: `RECORD_ALIASES`, the names of the packaged El Centro 1940 NS record; `PACKAGED_RECORDS`, the
@@ -138,7 +139,6 @@ def model_params() -> dict[str, Param]:
     return out
 
 
-MODEL_PARAMETERS = tuple(model_params())  # the built-in kinds' numeric parameters (scenes files' columns, lower-cased)
 UNDAMPED = {p.name: p.undamped for p in model_params().values() if p.undamped is not None}  # the value that dissipates nothing
 
 

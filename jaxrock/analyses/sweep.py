@@ -36,7 +36,6 @@ from ..scene import DEFAULT_PULSE, MODEL_KINDS, PULSES, model_kinds, model_param
 from .engine import batch_limit, make_stepper, on_devices, run_batch
 
 
-
 def axis_order() -> tuple[str, ...]:
     """A store's dimensions, outermost first (`jaxrock.scene.sweep_quantities`)."""
     return tuple(sweep_quantities())

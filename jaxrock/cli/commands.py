@@ -18,8 +18,8 @@ from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untru
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds,
                      SENSITIVITY_COST, cell_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
-from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_ENSEMBLE, MAX_REFINE, MODEL_PARAMETERS, PULSES,
-                     RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, parameter_help)
+from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_ENSEMBLE, MAX_REFINE, PULSES,
+                     RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, model_params, parameter_help)
 from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
                       _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary, SENSITIVITY_HELP,
                       uncertain_line)
@@ -218,7 +218,7 @@ def simulate(
     "Run a CSV of scenes (vmapped, grouped by structure) and write a results CSV.\n\n"
     f"Columns: height, tan_alpha | width, [tan_alpha_base], [model: {' | '.join(model_kinds())}], "
     f"[pulse: {' | '.join(PULSES)} | {RECORD_ALIASES[0]} | FILE], a_p | accel_ratio, omega_p | omega_ratio, [scale], "
-    f"{', '.join(f'[{k}]' for k in MODEL_PARAMETERS)}. Results: the inputs plus {', '.join(RESULT_COLUMNS)}."))
+    f"{', '.join(f'[{k}]' for k in model_params())}. Results: the inputs plus {', '.join(RESULT_COLUMNS)}."))
 @_guarded
 def batch(
     scenes: Path = typer.Argument(..., help="scenes CSV (one scene per row; see `jaxrock.io.scenes_file`)"),
@@ -357,7 +357,7 @@ def sweep(
     parameters) into a chunked Zarr store: resumable, a chunk per local device at a time, or spread
     over a Dask cluster."""
     from .._validate import JaxrockInputError, check_writable
-    from ..scene import model_params, takes
+    from ..scene import takes
 
     _check_count("--chunk-size", chunk_size)
     if devices is not None:

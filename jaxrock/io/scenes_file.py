@@ -262,14 +262,14 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     params = {"height": height, "tan_alpha": tan_a, "tan_alpha_base": tan_b}
     # the model parameters as each row's kind declares them (`jaxrock.scene.Param`): its range, its
     # default (computed by the model where it declares none: η eq. 5, c̄ eq. 17)
-    computed = {"eta": lambda: np.asarray(blocks.eta_r), "cbar": lambda: np.asarray(cbar_eq17(blocks.alpha_r))}
+    computed = {"eta": np.asarray(blocks.eta_r), "cbar": np.asarray(cbar_eq17(blocks.alpha_r))}
     for name, shared in model_params().items():
         value = np.full(t.n, np.nan)
         for k in takes(name):
             rows = kind == k
             p = MODEL_KINDS[k].params.get(name, shared)
             x = t.num(name.lower(), p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open, rows=rows)
-            default = p.default if p.default is not None else computed[name]() if name in computed else np.nan
+            default = p.default if p.default is not None else computed.get(name, np.nan)
             value = np.where(rows, np.where(np.isnan(x), default, x), value)
             t.fail(rows & np.isnan(value), name.lower(), f"missing: {p.meaning} is required for model {k} (no default)")
         params[name] = np.where(np.isnan(value), shared.default if shared.default is not None else 0.0, value)
