@@ -1,4 +1,5 @@
-"""Ground excitations as values (pytrees): Ricker pulses (SPEC "Excitations") and sampled records.
+"""Ground excitations as values (pytrees): Ricker pulses (SPEC "Excitations"), sine pulses of N
+cycles and sampled records.
 
 Every excitation gives the horizontal ground acceleration üg(t) [m/s²], the window
 [`t_start`, `t_end`] outside which it is negligible (pulses) or zero (records), and
@@ -234,6 +235,83 @@ class AntisymmetricRickerPulse(AbstractRicker):
     @staticmethod
     def shape(x):
         return _ricker_anti(x)
+
+
+def _check_cycles(n_cycles) -> None:
+    """N in {1/2, 1, 3/2, …} up to `SinePulse.MAX_CYCLES`: whole half cycles, so üg ends at zero."""
+    check_range("n_cycles (sine pulse cycles)", n_cycles, 0.5, SinePulse.MAX_CYCLES)
+    if is_concrete(n_cycles):
+        v = np.asarray(n_cycles, dtype=float)
+        if np.any(2 * v != np.round(2 * v)):
+            raise JaxrockInputError(f"n_cycles = {v[2 * v != np.round(2 * v)].flat[0]:g}: whole half cycles (0.5, 1, 1.5, …) "
+                                    "so that the pulse ends at üg = 0")
+
+
+class SinePulse(AbstractExcitation):
+    """One-sided sine pulse of N cycles: üg(t) = a_p sin(ω_p t) for 0 ≤ t ≤ 2πN/ω_p, zero outside.
+    N = 1 is the one-sine acceleration pulse (Makris & Roussos 2000's type-A cycloidal pulse, a
+    velocity pulse of one sign), N = 1/2 a half-sine; N is whole half cycles (üg ends at zero), an
+    array leaf (vmap over it). Its exceedances are in closed form: |sin x| > ℓ on (kπ + asin ℓ,
+    (k + 1)π − asin ℓ)."""
+
+    a_p: Float[Array, ""] = eqx.field(converter=_as_float)
+    omega_p: Float[Array, ""] = eqx.field(converter=_as_float)
+    n_cycles: Float[Array, ""] = eqx.field(converter=_as_float, default=1.0)
+    MAX_CYCLES: ClassVar[float] = 100.0
+
+    def __check_init__(self):
+        check_range("a_p (pulse amplitude) [m/s^2]", self.a_p, -math.inf, math.inf)
+        if is_concrete(self.a_p) and np.any(np.asarray(self.a_p) == 0):
+            raise JaxrockInputError("a_p = 0: the pulse amplitude must be non-zero (any sign)")
+        _check_cycles(self.n_cycles)
+        check_limits(self.limits())
+
+    def limits(self) -> tuple[Limit, ...]:
+        return (Limit("|a_p| (pulse amplitude) [m/s^2]", jnp.abs(self.a_p), 0.0, math.inf, lo_open=True, hi_open=True),
+                Limit("omega_p (pulse frequency) [rad/s]", self.omega_p, 0.0, math.inf, lo_open=True, hi_open=True),
+                Limit("n_cycles (sine pulse cycles)", self.n_cycles, 0.5, self.MAX_CYCLES))
+
+    def __call__(self, t):
+        t = jnp.asarray(t, dtype=float)
+        inside = (t >= 0) & (t <= self.t_end)
+        return jnp.where(inside, self.a_p * jnp.sin(self.omega_p * t), 0.0)
+
+    def scaled(self, factor) -> "SinePulse":
+        """The same pulse at `factor` × a_p."""
+        return eqx.tree_at(lambda e: e.a_p, self, self.a_p * jnp.asarray(factor, dtype=float))
+
+    @property
+    def t_start(self):
+        return jnp.zeros_like(self.omega_p)
+
+    @property
+    def t_end(self):
+        return 2 * jnp.pi * self.n_cycles / self.omega_p
+
+    @property
+    def max_step(self):
+        return 0.5 / self.omega_p
+
+    @property
+    def peak(self):
+        return jnp.abs(self.a_p)  # N ≥ 1/2: sin reaches 1
+
+    @property
+    def step_ts(self):
+        return None
+
+    def next_exceedance(self, t, level):
+        t = jnp.asarray(t, dtype=float)
+        ell = level / jnp.abs(self.a_p)
+        reach = ell < 1.0  # strict: a peak exactly at the level never exceeds it
+        x0 = jnp.arcsin(jnp.where(reach, ell, 0.5))  # (a stand-in where unreached keeps the derivative finite)
+        x = jnp.maximum(self.omega_p * t, 0.0)
+        k = jnp.floor(x / jnp.pi)
+        r = x - k * jnp.pi
+        now = (r > x0) & (r < jnp.pi - x0) & (x < 2 * jnp.pi * self.n_cycles)
+        x_up = jnp.where(r <= x0, k * jnp.pi + x0, (k + 1) * jnp.pi + x0)
+        found = reach & (now | (x_up < 2 * jnp.pi * self.n_cycles))
+        return jnp.where(found, jnp.where(now, t, x_up / self.omega_p), jnp.inf)
 
 
 class StillGround(AbstractExcitation):

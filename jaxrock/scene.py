@@ -7,7 +7,8 @@ arguments from it before JAX is loaded, and the classes it names are imported wh
 - Model kinds: the registry `MODEL_KINDS` (`model_kinds()`: rigid, spring, spring-flexible, and
   any kind registered since with `register_model_kind`); `DEFAULT_MODEL`; each kind's numeric
   parameters declared as `Param`s (`model_params()`: all of them); `UNDAMPED`, the value of each
-  damping parameter that dissipates nothing.
+  damping parameter that dissipates nothing; `load_plugins`, the kinds of other packages
+  (`PLUGIN_GROUP` entry points, the `PLUGIN_ENV` variable).
 - Pulse kinds: `PULSES` (name → excitation class of `jaxrock.excitation`, `pulse_class`); a new
   pulse kind is a class there and a line here. `DEFAULT_PULSE`.
 - Records: `RECORD_ALIASES`, the names of the packaged El Centro 1940 NS record; `PACKAGED_RECORDS`, the
@@ -45,7 +46,8 @@ class Param(NamedTuple):
     [lo, hi] (open ends where `lo_open`, `hi_open`); its default (None: the model computes it,
     `default_text` says how) and, for a damping parameter, the value that dissipates nothing
     (`undamped`); `neutral`, the value a run puts in place of an invalid one under `vmap`
-    (`jaxrock.model.guard_scene`; None: the default). The command line's help, the scenes file's
+    (`jaxrock.model.guard_scene`; None: the default); `step`, where the values are whole multiples
+    of it (a sine pulse's half cycles). The command line's help, the scenes file's
     table, the sweep's quantities, `UNDAMPED` and the neutral values are generated from it."""
 
     name: str
@@ -61,17 +63,42 @@ class Param(NamedTuple):
     long_name: str = ""
     units: str = "1"
     neutral: float | None = None
+    step: float | None = None
 
     @property
     def range_text(self) -> str:
-        """The valid range as a table writes it ("[0, 1]", "≥ 0", "> 0")."""
+        """The valid range as a table writes it ("[0, 1]", "≥ 0", "> 0"; "multiples of 0.5 in [0.5, 100]")."""
         if math.isinf(self.hi):
-            return f"{'>' if self.lo_open else '≥'} {self.lo:g}"
-        return f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}{')' if self.hi_open else ']'}"
+            text = f"{'>' if self.lo_open else '≥'} {self.lo:g}"
+        else:
+            text = f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}{')' if self.hi_open else ']'}"
+        return text if self.step is None else f"multiples of {self.step:g} in {text}"
+
+    def off_step(self, x):
+        """Where the values `x` (an array) are not whole multiples of `step` (none without one)."""
+        import numpy as np
+
+        x = np.asarray(x, dtype=float)
+        if self.step is None:
+            return np.zeros(x.shape, bool)
+        return np.isfinite(x) & (x / self.step != np.round(x / self.step))
+
+    def check_step(self, x, name: str | None = None) -> None:
+        """Refuse, in one line, a value that is not a whole multiple of `step`."""
+        import numpy as np
+
+        bad = self.off_step(x)
+        if bad.any():
+            raise JaxrockInputError(f"{name or self.name} = {np.asarray(x, dtype=float)[bad].flat[0]:g}; valid: {self.range_text}")
 
     @property
     def range(self) -> tuple[float, float, bool, bool]:
         return self.lo, self.hi, self.lo_open, self.hi_open
+
+    @property
+    def flag(self) -> str:
+        """The command line's option ("--tan-alpha" for `tan_alpha`; "--E" for `E`)."""
+        return "--" + self.name.replace("_", "-")
 
 
 # the built-in models' parameters (paper: η eq. 5, c̄ eq. 17; the concrete column of sections 4–6)
@@ -129,6 +156,32 @@ register_model_kind("spring-flexible", "jaxrock.spring.model:flexible_scene", (C
 DEFAULT_MODEL = "rigid"
 
 
+# Model kinds from other packages: the modules named by the entry points of `PLUGIN_GROUP` (a
+# package's `[project.entry-points."jaxrock.models"]`) and by the environment variable `PLUGIN_ENV`
+# (module names separated by commas), imported by the command line before it builds its options,
+# each registering its kinds with `register_model_kind`.
+PLUGIN_GROUP = "jaxrock.models"
+PLUGIN_ENV = "JAXROCK_PLUGINS"
+
+
+def load_plugins() -> list[str]:
+    """Import the plugin modules (`PLUGIN_GROUP`, `PLUGIN_ENV`); returns one line per module that
+    could not be imported (the command line refuses to start with it)."""
+    import os
+    from importlib.metadata import entry_points
+
+    errors = []
+    named = [(f"entry point {ep.name} ({ep.value})", ep.load) for ep in entry_points(group=PLUGIN_GROUP)]
+    named += [(f"{PLUGIN_ENV} module {m.strip()!r}", lambda m=m.strip(): importlib.import_module(m))
+              for m in os.environ.get(PLUGIN_ENV, "").split(",") if m.strip()]
+    for what, load in named:
+        try:
+            load()
+        except Exception as e:  # any failure of someone else's module: one line, the command refuses to start
+            errors.append(f"{what} could not be loaded: {type(e).__name__}: {e}")
+    return errors
+
+
 def model_params() -> dict[str, Param]:
     """Every numeric model parameter of the registered kinds, by name (a name two kinds declare:
     the first kind's declaration)."""
@@ -154,9 +207,41 @@ def takes(parameter: str) -> tuple[str, ...]:
 
 
 # -- pulse kinds and records -----------------------------------------------------------------------
-# name → a class of jaxrock.excitation by name (eq. 28, eq. 29), or any callable (a_p, ω_p) → excitation
-PULSES: dict[str, str | Callable] = {"symmetric": "RickerPulse", "antisymmetric": "AntisymmetricRickerPulse"}
+# name → a class of jaxrock.excitation by name (eq. 28, eq. 29), or any callable (a_p, ω_p, **parameters) → excitation
+PULSES: dict[str, str | Callable] = {}
+PULSE_PARAMS: dict[str, dict[str, Param]] = {}  # name → its parameters beyond a_p and ω_p (the spectra's axes)
+
+
+def register_pulse_kind(name: str, cls: str | Callable, parameters: tuple[Param, ...] = ()) -> None:
+    """Make a pulse kind nameable (`pulse=` of spectra and sweeps, a scenes file's `pulse`, the
+    CLI's `--pulse`): `cls(a_p, omega_p, **parameters)` makes one pulse (traceable: batches vmap
+    it; a class of `jaxrock.excitation` may be named by its name), `parameters` its numeric
+    parameters beyond a_p and ω_p as `Param`s (flags, scenes-file columns, sweep quantities)."""
+    if not name or name != name.lower() or "," in name:
+        raise JaxrockInputError(f"pulse kind {name!r}: a lower-case name without commas")
+    PULSES[name] = cls
+    PULSE_PARAMS[name] = {p.name: p for p in parameters}
+
+
+N_CYCLES = Param("n_cycles", "cycles N of the sine pulse", "–", 0.5, 100.0, default=1.0, long_name="sine pulse cycles", step=0.5)
+register_pulse_kind("symmetric", "RickerPulse")
+register_pulse_kind("antisymmetric", "AntisymmetricRickerPulse")
+register_pulse_kind("sine", "SinePulse", (N_CYCLES,))
 DEFAULT_PULSE = "symmetric"
+
+
+def pulse_params() -> dict[str, Param]:
+    """Every numeric parameter of the pulse kinds beyond a_p and ω_p, by name."""
+    out: dict[str, Param] = {}
+    for params in PULSE_PARAMS.values():
+        for p in params.values():
+            out.setdefault(p.name, p)
+    return out
+
+
+def pulse_takes(parameter: str) -> tuple[str, ...]:
+    """The pulse kinds that take a parameter."""
+    return tuple(k for k, params in PULSE_PARAMS.items() if parameter in params)
 RECORD_ALIASES = ("elcentro", "el-centro", "el_centro")  # the packaged El Centro 1940 NS (`jaxrock.el_centro`)
 # the other packaged records (jaxrock/data/records; sources in jaxrock/data/README.md): name → file
 PACKAGED_RECORDS = {"elcentro_peknold": "elCentro_peknold.AT2", "arl360": "ARL360.at2", "b-elc000": "B-ELC000.AT2",
@@ -270,7 +355,7 @@ def parameters() -> tuple[Parameter, ...]:
         Parameter("tan_alpha_base", "–", "extended rigid base tanα′ = b′/h (paper section 5)", "[tanα, 1); default: no base"),
         Parameter("model", "–", ", ".join(f"`{k.name}` ({k.description})" for k in MODEL_KINDS.values()),
                   f"default `{DEFAULT_MODEL}`"),
-        Parameter("pulse", "–", f"{pulses} Ricker pulse, `{RECORD_ALIASES[0]}` (the packaged El Centro 1940 NS), or a record "
+        Parameter("pulse", "–", f"a pulse kind ({pulses}: the Ricker pulses of eqs. 28 and 29, a sine pulse of `n_cycles`), `{RECORD_ALIASES[0]}` (the packaged El Centro 1940 NS), or a record "
                   "file path (`.AT2` or two-column text; relative to the scenes file, else to the working directory)",
                   f"default `{DEFAULT_PULSE}`"),
         Parameter("a_p", "m/s²", "pulse amplitude (any sign, ≠ 0)", "pulses: give it or `accel_ratio`"),
@@ -278,6 +363,8 @@ def parameters() -> tuple[Parameter, ...]:
         Parameter("omega_p", "rad/s", "pulse frequency", "> 0; pulses: give it or `omega_ratio`"),
         Parameter("omega_ratio", "–", AXES["omega_ratio"].replace("omega", "ω") + "′", "> 0"),
         Parameter("scale", "–", "factor on a record", "≥ 0, default 1 (records only)"),
+        *(Parameter(p.name, p.unit, p.meaning, f"{p.range_text}, default {p.default_text or format(p.default, 'g')} "
+                    f"(pulse {_kinds(pulse_takes(p.name))})") for p in pulse_params().values()),
         *(Parameter(p.name, p.unit, p.meaning, f"{p.range_text}, default {p.default_text or format(p.default, 'g')} "
                     f"({_kinds(takes(p.name))})") for p in model_params().values()),
     )
@@ -311,6 +398,7 @@ def sweep_quantities() -> dict[str, tuple]:
         **{p.name: (p.long_name or p.meaning, p.units, p.range) for p in model_params().values()},
         "smoothing": ("spring pre-yield rotation theta_s/alpha'", "1", (0.0, 1.0, True, True)),
         "scale": ("record scale factor", "1", (0.0, math.inf, False, True)),
+        **{p.name: (p.long_name or p.meaning, p.units, p.range) for p in pulse_params().values()},
         "accel_ratio": ("a_p/(g tan alpha')", "1", (0.0, math.inf, True, True)),
         "omega_ratio": ("omega_p/p'", "1", (0.0, math.inf, True, True)),
     }

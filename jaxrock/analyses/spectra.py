@@ -154,6 +154,7 @@ def overturning_spectrum(
     accel_ratio,
     *,
     pulse=DEFAULT_PULSE,
+    pulse_params: dict | None = None,
     integrator: AbstractIntegrator | None = None,
     batch_size: int = 4096,
     progress: bool = True,
@@ -165,7 +166,8 @@ def overturning_spectrum(
     """max |θ|/α′ of `model` over the grid `accel_ratio` (a_p/(g tanα′)) × `omega_ratio` (ω_p/p′).
 
     - `pulse`: a pulse kind's name (`jaxrock.scene.PULSES`: "symmetric" Ricker, "antisymmetric"
-      eq. 29) or a pulse class.
+      eq. 29, "sine" of N cycles) or a pulse class; `pulse_params` its parameters beyond a_p and
+      ω_p (`jaxrock.scene.PULSE_PARAMS`, e.g. {"n_cycles": 2}; None: their defaults).
     - `batch_size`: the most cells run together in one vmapped batch (memory bound); the grid is
       split into batches of about the size the batch engine's passes share (`engine.even_batches`),
       whole rows of ω_p/p′: the chunks of a sweep (`jaxrock.analyses.sweep`), which runs it.
@@ -193,13 +195,15 @@ def overturning_spectrum(
         integ = model.default_integrator() if integrator is None else integrator
     stepper = make_stepper(model, integ, False, sensitivity)  # compiled once, reused by run_batch (the same call)
     chunk = even_batches(n, min(int(batch_size), batch_limit(stepper)), stepper.schedule.batch_unit)
+    pp = dict(pulse_params or {})
     sweep = Sweep.make(model, pulse=cls, accel_ratio=ar, omega_ratio=wr, integrator=integrator, chunk_size=chunk,
-                       sensitivity=sensitivity)
+                       sensitivity=sensitivity, **pp)
     ds = run_sweep(sweep, ck, progress=progress)
     block = model.block
     attrs = {
         "model": type(model).__name__,
         "pulse": cls.__name__,
+        **{k: float(v) for k, v in sweep.fixed.items() if k in pp},
         "threshold": float(model.threshold),
         "tan_alpha": float(jnp.tan(block.alpha_r)),
         "alpha": float(block.alpha_r),
@@ -211,7 +215,7 @@ def overturning_spectrum(
     }
     spec = Spectrum(omega_ratio=wr, accel_ratio=ar, **{k: ds[k].values for k in (*OUTPUTS, "status")}, attrs=attrs)
     if int(refine) > 0:
-        spec = refine_boundaries(model, spec, pulse=pulse, iterations=int(refine), integrator=integrator)
+        spec = refine_boundaries(model, spec, pulse=pulse, pulse_params=pp, iterations=int(refine), integrator=integrator)
     if ck is not None and ck.exists() and not keep_checkpoint:
         shutil.rmtree(ck)
     return spec
@@ -222,6 +226,7 @@ def refine_boundaries(
     spectrum: Spectrum,
     *,
     pulse=DEFAULT_PULSE,
+    pulse_params: dict | None = None,
     iterations: int = 12,
     integrator: AbstractIntegrator | None = None,
 ) -> Spectrum:
@@ -231,9 +236,10 @@ def refine_boundaries(
     below it; `iterations` bisections of a_p, all columns in one vmapped batch per step, shrink
     it by 2^-iterations. A column whose first grid row already uplifts (overturns) keeps the grid
     value; one with none stays NaN. Overturning is not monotone in a_p: the line found is the
-    least a_p within the bracket, not below it.
+    least a_p within the bracket, not below it. `pulse`, `pulse_params`: as `overturning_spectrum`'s.
     """
     cls = pulse_class(pulse)
+    pp = dict(pulse_params or {})
     ar, wr = spectrum.accel_ratio, spectrum.omega_ratio
     lines = []
     for mask, flag in ((spectrum.uplifted, "uplifted"), (spectrum.overturned, "overturned")):
@@ -247,7 +253,7 @@ def refine_boundaries(
             for _ in range(int(iterations)):
                 interrupt.stop_point()
                 mid = np.where(todo, 0.5 * (lo + hi), ar[0])
-                exc = jax.vmap(cls)(*(jnp.asarray(x) for x in pulse_of_ratios(model.block, mid, wr)))
+                exc = jax.vmap(lambda a, w: cls(a, w, **pp))(*(jnp.asarray(x) for x in pulse_of_ratios(model.block, mid, wr)))
                 yes = np.asarray(getattr(run_batch(model, exc, integrator), flag))
                 hi = np.where(todo & yes, mid, hi)
                 lo = np.where(todo & ~yes, mid, lo)

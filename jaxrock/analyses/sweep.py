@@ -32,7 +32,8 @@ import numpy as np
 
 from .._validate import JaxrockInputError, check_range
 from ..outputs import OUTPUTS
-from ..scene import DEFAULT_PULSE, MODEL_KINDS, PULSES, model_kinds, model_params, sweep_quantities, takes
+from ..scene import (DEFAULT_PULSE, MODEL_KINDS, PULSE_PARAMS, PULSES, model_kinds, model_params, pulse_class, pulse_params, pulse_takes,
+                     sweep_quantities, takes)
 from .engine import batch_limit, make_stepper, on_devices, run_batch
 
 
@@ -48,6 +49,14 @@ def model_quantities() -> tuple[str, ...]:
 
 
 PULSE_QUANTITIES = ("accel_ratio", "omega_ratio")
+
+
+def _pulse_params(pulse) -> dict:
+    """The parameters beyond a_p and ω_p (`jaxrock.scene.PULSE_PARAMS`) of a pulse kind, named or
+    given as its class or callable (a class registered under no name: none)."""
+    if isinstance(pulse, str):
+        return PULSE_PARAMS.get(pulse, {})
+    return next((PULSE_PARAMS.get(k, {}) for k, v in PULSES.items() if v is pulse or (isinstance(v, str) and pulse_class(k) is pulse)), {})
 DEFAULTS = {"height": 10.0, "tan_alpha": 0.2}  # the rest: the model kind's own defaults
 
 
@@ -109,6 +118,11 @@ class Sweep:
         if backbone is not None and isinstance(model, str) and "backbone" not in MODEL_KINDS[model].parameters:
             raise JaxrockInputError(f"backbone applies to the spring models only, not {model}")
         recs = () if records is None else (tuple(records) if isinstance(records, (list, tuple)) else (records,))
+        own_pulse = _pulse_params(DEFAULT_PULSE if pulse is None else pulse)
+        for name in (q for q in given if q in pulse_params()):
+            if recs or name not in own_pulse:
+                kinds = f"pulse {' / '.join(pulse_takes(name))}"
+                raise JaxrockInputError(f"{name} applies to {kinds} only, not {'records' if recs else pulse or DEFAULT_PULSE}")
         if recs:
             if pulse is not None or any(q in given for q in PULSE_QUANTITIES):
                 raise JaxrockInputError("a sweep runs records or pulses, not both: drop pulse/accel_ratio/omega_ratio, or records")
@@ -135,10 +149,13 @@ class Sweep:
                 continue
             v = np.asarray(values[name], dtype=float)
             own = MODEL_KINDS[model].params.get(name) if isinstance(model, str) else None  # the kind's own declaration
+            own = own_pulse.get(name, own)
             lo, hi, lo_open, hi_open = own.range if own is not None else known[name][2]
             if v.ndim > 1 or v.size == 0:
                 raise JaxrockInputError(f"{name}: one number or a 1-D sequence of numbers, got shape {v.shape}")
             check_range(name, v, lo, hi, lo_open=lo_open, hi_open=hi_open)
+            if own is not None:
+                own.check_step(v, name)
             (axes if v.ndim == 1 else fixed)[name] = v if v.ndim == 1 else float(v)
         ta = axes.get("tan_alpha", fixed.get("tan_alpha"))
         tb = axes.get("tan_alpha_base", fixed.get("tan_alpha_base"))
@@ -280,8 +297,6 @@ class Sweep:
     @property
     def excitation(self) -> str:
         """The pulse class's name (`RickerPulse`, ...), or "records"."""
-        from ..scene import pulse_class
-
         return "records" if self.pulse is None else pulse_class(self.pulse).__name__
 
     # -- models and excitations -------------------------------------------------------------------
@@ -330,14 +345,13 @@ class Sweep:
         import jax.numpy as jnp
 
         from ..geometry import pulse_of_ratios
-        from ..scene import pulse_class
-
         if self.pulse is not None:
             if batched:
                 a_p, w_p = jax.vmap(pulse_of_ratios)(model.block, jnp.asarray(v["accel_ratio"]), jnp.asarray(v["omega_ratio"]))
             else:
                 a_p, w_p = pulse_of_ratios(model.block, v["accel_ratio"], v["omega_ratio"])
-            return jax.vmap(pulse_class(self.pulse))(jnp.asarray(a_p), jnp.asarray(w_p))
+            kw = {k: jnp.asarray(v[k]) for k in _pulse_params(self.pulse) if k in v}
+            return jax.vmap(lambda a, w, kw: pulse_class(self.pulse)(a, w, **kw))(jnp.asarray(a_p), jnp.asarray(w_p), kw)
         import equinox as eqx
 
         from ..io.scenes_file import stack

@@ -19,10 +19,11 @@ from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untru
                      SENSITIVITY_COST, cell_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_ENSEMBLE, MAX_REFINE, PULSES,
-                     RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, model_params, parameter_help)
+                     RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, model_params, parameter_help,
+                     pulse_params)
 from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
                       _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary, SENSITIVITY_HELP,
-                      uncertain_line)
+                      LIST_HELP as _LIST, check_pulse_params, split_params, uncertain_line, with_params)
 
 FORCE_OPTION = typer.Option(False, "--force", help="let outputs replace existing files that jaxrock did not write "
                             "(without it such a file is refused; symbolic links always are)")
@@ -43,12 +44,13 @@ app = typer.Typer(
 
 @app.command()
 @_guarded
+@with_params()
 def spectrum(
     model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
     height: float = typer.Option(10.0, help="full height 2h [m]"),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h, in [tanα, 1)"),
-    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="Ricker pulse shape"),
+    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="pulse kind: the Ricker pulses of eqs. 28 (symmetric) and 29 (antisymmetric), a sine pulse of --n-cycles"),
     omega_min: float = typer.Option(1.0, help="smallest ω_p/p"),
     omega_max: float = typer.Option(15.0, help="largest ω_p/p"),
     n_omega: int = typer.Option(48, help="number of ω_p/p values"),
@@ -70,6 +72,7 @@ def spectrum(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),
+    **params: Optional[float],
 ):
     """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
     from ..io.files import check_output, output_stem
@@ -77,7 +80,9 @@ def spectrum(
     wr = _axis("omega", omega_min, omega_max, n_omega)
     ar = _axis("accel", accel_min, accel_max, n_accel)
     _check_count("--batch-size", batch_size)
-    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped)
+    model_kw, pulse_kw = split_params(params)
+    check_pulse_params(pulse.value, pulse_kw)
+    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, **model_kw)
     integ = _integrator(model, tol)
     out = output_stem(out, "spectrum")
     for suffix in (".nc", ".png"):
@@ -91,7 +96,7 @@ def spectrum(
     from ..interrupt import Interrupted
 
     try:
-        spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, integrator=integ, batch_size=batch_size, progress=not quiet,
+        spec = overturning_spectrum(m, wr, ar, pulse=pulse.value, pulse_params=pulse_kw, integrator=integ, batch_size=batch_size, progress=not quiet,
                                     checkpoint=ck, keep_checkpoint=True, refine=refine, sensitivity=sensitivity)
     except Interrupted:
         _interrupted(ck, wr.size * ar.size)
@@ -102,7 +107,7 @@ def spectrum(
                                                   "history": _history()})
     from ..reports import spectrum_files
 
-    title = f"{model.value}{' (undamped)' if undamped else ''}, {pulse.value} pulse, 2h = {height:g} m, tanα = {tan_alpha:g}"
+    title = f"{model.value}{' (undamped)' if undamped else ''}, {pulse.value} pulse{''.join(f' {k} = {v:g}' for k, v in pulse_kw.items())}, 2h = {height:g} m, tanα = {tan_alpha:g}"
     nc, png = spectrum_files(spec, out, title)
     if ck is not None and ck.exists():  # kept until the result files are written
         import shutil
@@ -127,12 +132,13 @@ def _simulate(model, excitation, save=None, integrator=None, sensitivity: bool =
 
 @app.command()
 @_guarded
+@with_params()
 def simulate(
     height: float = typer.Option(10.0, help="full height 2h [m]"),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h"),
     model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
-    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="Ricker pulse shape"),
+    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="pulse kind: the Ricker pulses of eqs. 28 (symmetric) and 29 (antisymmetric), a sine pulse of --n-cycles"),
     a_p: Optional[float] = typer.Option(None, "--a-p", help="pulse amplitude [m/s²] (default: --accel-ratio 4)"),
     accel_ratio: Optional[float] = typer.Option(None, help="pulse amplitude as a_p/(g tanα) (default 4)"),
     omega_p: Optional[float] = typer.Option(None, help="pulse frequency [rad/s] (default 2π)"),
@@ -142,11 +148,6 @@ def simulate(
     units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
                                  "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
     undamped: bool = typer.Option(False, "--undamped", help=UNDAMPED_HELP),
-    eta: Optional[float] = typer.Option(None, help=parameter_help("eta")),
-    cbar: Optional[float] = typer.Option(None, help=parameter_help("cbar")),
-    E: Optional[float] = typer.Option(None, "--E", help=parameter_help("E")),
-    rho: Optional[float] = typer.Option(None, help=parameter_help("rho")),
-    zeta: Optional[float] = typer.Option(None, help=parameter_help("zeta")),
     backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {BACKBONE_DEFAULTS}; the bilinear "
                                                     "at θy = 1e-5 α′ is within 1e-3 of the sharp limit, README)"),
     smoothing: Optional[float] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1) (default {SMOOTHING_DEFAULTS})"),
@@ -157,11 +158,12 @@ def simulate(
     n_points: Optional[int] = typer.Option(None, help=f"plot: number of saved time points, 2 to {MAX_PLOT_POINTS:,} (default 1500)"),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     force: bool = FORCE_OPTION,
+    **params: Optional[float],
 ):
     """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
-    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, eta=eta, cbar=cbar, E=E, rho=rho, zeta=zeta,
-                    backbone=backbone, smoothing=smoothing)
-    exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio, units)
+    model_kw, pulse_kw = split_params(params)
+    m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, backbone=backbone, smoothing=smoothing, **model_kw)
+    exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio, units, pulse_kw)
     integ = _integrator(model, tol)
     if plot is None:
         from .._validate import JaxrockInputError
@@ -218,7 +220,7 @@ def simulate(
     "Run a CSV of scenes (vmapped, grouped by structure) and write a results CSV.\n\n"
     f"Columns: height, tan_alpha | width, [tan_alpha_base], [model: {' | '.join(model_kinds())}], "
     f"[pulse: {' | '.join(PULSES)} | {RECORD_ALIASES[0]} | FILE], a_p | accel_ratio, omega_p | omega_ratio, [scale], "
-    f"{', '.join(f'[{k}]' for k in model_params())}. Results: the inputs plus {', '.join(RESULT_COLUMNS)}."))
+    f"{', '.join(f'[{k}]' for k in (*model_params(), *pulse_params()))}. Results: the inputs plus {', '.join(RESULT_COLUMNS)}."))
 @_guarded
 def batch(
     scenes: Path = typer.Argument(..., help="scenes CSV (one scene per row; see `jaxrock.io.scenes_file`)"),
@@ -316,14 +318,12 @@ def record_spectrum(
 # ----------------------------------------------------------------------------------------------
 # sweep
 # ----------------------------------------------------------------------------------------------
-_LIST = "one value, or several ('1,2,5' or 'a:b:n'): an axis of the sweep"
-
-
 @app.command()
 @_guarded
+@with_params(lists=True)
 def sweep(
     model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
-    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="Ricker pulse shape (pulse sweeps)"),
+    pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="pulse kind: the Ricker pulses of eqs. 28 (symmetric) and 29 (antisymmetric), a sine pulse of --n-cycles (pulse sweeps)"),
     accel_ratio: Optional[str] = typer.Option(None, help=f"a_p/(g tanα′): {_LIST} (pulse sweeps; default 0.5:10:48)"),
     omega_ratio: Optional[str] = typer.Option(None, help=f"ω_p/p′: {_LIST} (pulse sweeps; default 1:15:48)"),
     records: Optional[str] = typer.Option(None, help="a record sweep instead of pulses: record files, folders of records (.AT2, "
@@ -333,11 +333,6 @@ def sweep(
     height: str = typer.Option("10", help=f"full height 2h [m]: {_LIST}"),
     tan_alpha: str = typer.Option("0.2", help=f"slenderness tanα: {_LIST}"),
     tan_alpha_base: Optional[str] = typer.Option(None, help=f"extended base tanα′ ≥ tanα: {_LIST}"),
-    eta: Optional[str] = typer.Option(None, help=f"{parameter_help('eta')}: {_LIST}"),
-    cbar: Optional[str] = typer.Option(None, help=f"{parameter_help('cbar')}: {_LIST}"),
-    E: Optional[str] = typer.Option(None, "--E", help=f"{parameter_help('E')}: {_LIST}"),
-    rho: Optional[str] = typer.Option(None, help=f"{parameter_help('rho')}: {_LIST}"),
-    zeta: Optional[str] = typer.Option(None, help=f"{parameter_help('zeta')}: {_LIST}"),
     smoothing: Optional[str] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1): {_LIST}"),
     backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {BACKBONE_DEFAULTS})"),
     tol: Optional[float] = typer.Option(None, help="spring models: generalized-α at this local tolerance (default: the model's default integrator)"),
@@ -352,6 +347,7 @@ def sweep(
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h or 2 GB"),
+    **params: Optional[str],
 ):
     """Every scene of a product of axes (pulses or records × sizes × slendernesses × model
     parameters) into a chunked Zarr store: resumable, a chunk per local device at a time, or spread
@@ -362,16 +358,17 @@ def sweep(
     _check_count("--chunk-size", chunk_size)
     if devices is not None:
         _check_count("--devices", devices)
-    lists = {"height": height, "tan_alpha": tan_alpha, "tan_alpha_base": tan_alpha_base, "eta": eta, "cbar": cbar, "E": E,
-             "rho": rho, "zeta": zeta, "smoothing": smoothing, "accel_ratio": accel_ratio, "omega_ratio": omega_ratio,
-             "scale": scale}
+    lists = {"height": height, "tan_alpha": tan_alpha, "tan_alpha_base": tan_alpha_base, **params, "smoothing": smoothing,
+             "accel_ratio": accel_ratio, "omega_ratio": omega_ratio, "scale": scale}
     given = {}
     for name, text in lists.items():
         if text is None:
             continue
-        flag = "--" + (name if name == "E" else name.replace("_", "-"))
+        flag = "--" + name.replace("_", "-")
         if (name in model_params() or name == "smoothing") and model.value not in takes(name):
             raise JaxrockInputError(f"{flag} applies to --model {' / '.join(takes(name))} only, not {model.value}")
+        if name in pulse_params():
+            check_pulse_params(pulse.value, {name: text}, records is not None)
         v = parse_values(flag, text)
         given[name] = float(v[0]) if v.size == 1 else v
     if records is None:

@@ -25,6 +25,11 @@ class _OneLineErrors(typer.core.TyperGroup):
         from ..runtime import use_cpu_cores
 
         use_cpu_cores()  # before JAX starts: a sweep's chunks run one per core
+        from . import PLUGIN_ERRORS
+
+        if PLUGIN_ERRORS and standalone_mode:  # a plugin that failed to load: its kinds are missing from every option
+            typer.echo(f"Error: {PLUGIN_ERRORS[0]}", err=True)
+            sys.exit(EXIT_INPUT)
         try:
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except typer.Abort:

@@ -22,6 +22,40 @@ PulseKind = Enum("PulseKind", {k: k for k in PULSES}, type=str)
 
 
 BackboneKind = Enum("BackboneKind", {k: k for k in BACKBONES}, type=str)
+LIST_HELP = "one value, or several ('1,2,5' or 'a:b:n'): an axis of the sweep"
+
+
+def with_params(lists: bool = False):
+    """A command taking one option per declared parameter of the model kinds and pulse kinds
+    (`jaxrock.scene.model_params`, `pulse_params`: the built-in kinds' and any registered before
+    the command line was built, a plugin's included), its flag (`Param.flag`) and help generated
+    from the declaration; the command receives them as keywords (None: not given; split them with
+    `split_params`). `lists`: each takes a sweep axis ('1,2,5', 'a:b:n') as text."""
+    import inspect
+
+    import typer
+
+    from ..scene import model_params, parameter_help, pulse_params
+
+    def decorate(command):
+        sig = inspect.signature(command)
+        own = [q for q in sig.parameters.values() if q.kind is not q.VAR_KEYWORD]
+        declared = {**model_params(), **pulse_params()}
+        added = [inspect.Parameter(p.name, inspect.Parameter.KEYWORD_ONLY, annotation=Optional[str] if lists else Optional[float],
+                                   default=typer.Option(None, p.flag, help=parameter_help(p.name) + (f": {LIST_HELP}" if lists else "")))
+                 for p in declared.values() if p.name not in sig.parameters]
+        command.__signature__ = sig.replace(parameters=own + added)
+        return command
+
+    return decorate
+
+
+def split_params(params: dict) -> tuple[dict, dict]:
+    """The keywords of `with_params` as (model parameters, pulse parameters), those given only."""
+    from ..scene import pulse_params
+
+    given = {k: v for k, v in params.items() if v is not None}
+    return {k: v for k, v in given.items() if k not in pulse_params()}, {k: v for k, v in given.items() if k in pulse_params()}
 
 
 def _check_count(name: str, n: int):
@@ -203,15 +237,29 @@ def spectrum_summary(spec, seconds: float) -> str:
     return "\n".join(lines)
 
 
-def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio, units=None):
+def check_pulse_params(pulse: str, given: dict, record: bool = False) -> None:
+    """Refuse, in one line, a pulse parameter flag the pulse kind does not take (or any, with a record)."""
+    from .._validate import JaxrockInputError
+    from ..scene import PULSE_PARAMS, pulse_params, pulse_takes
+
+    for name in given:
+        if record or name not in PULSE_PARAMS.get(pulse, {}):
+            raise JaxrockInputError(f"{pulse_params()[name].flag} applies to --pulse {' / '.join(pulse_takes(name))} only, "
+                                    f"not {'--record' if record else pulse}")
+
+
+def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio, units=None,
+                pulse_params: dict | None = None):
     from .._validate import JaxrockInputError, check_range
     from ..geometry import pulse_of_ratios, ratios_of_pulse
     from ..scene import is_builtin_record, pulse_class
 
+    pulse_params = pulse_params or {}
+    check_pulse_params(pulse, pulse_params, record is not None)
     if record is not None:
         for name, v in (("--a-p", a_p), ("--accel-ratio", accel_ratio), ("--omega-p", omega_p), ("--omega-ratio", omega_ratio)):
             if v is not None:
-                raise JaxrockInputError(f"{name} applies to Ricker pulses, not to --record")
+                raise JaxrockInputError(f"{name} applies to pulses, not to --record")
         check_range("--scale", scale, 0.0, math.inf, hi_open=True)
         if is_builtin_record(record) and not Path(record).exists():
             from ..io.records import builtin_record
@@ -228,7 +276,7 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
             rec = read_record(record) if units is None else read_record(record, units=units)
         return rec.scaled(scale), f"{rec.name} × {scale:g}"
     if units is not None:
-        raise JaxrockInputError("--units applies to --record files, not to Ricker pulses")
+        raise JaxrockInputError("--units applies to --record files, not to pulses")
     if a_p is not None and accel_ratio is not None:
         raise JaxrockInputError("give --a-p or --accel-ratio, not both")
     if omega_p is not None and omega_ratio is not None:
@@ -243,9 +291,10 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
         else:
             check_range("--omega-ratio", omega_ratio, 0.0, math.inf, lo_open=True, hi_open=True)
             omega_p = float(pulse_of_ratios(block, 1.0, omega_ratio)[1])
-    exc = pulse_class(pulse)(a_p, omega_p)
+    exc = pulse_class(pulse)(a_p, omega_p, **pulse_params)
     a_r, w_r = (float(x) for x in ratios_of_pulse(block, a_p, omega_p))
-    desc = f"{pulse} Ricker pulse a_p = {a_p:.4g} m/s² ({a_r:.4g} g tanα), ω_p = {omega_p:.4g} rad/s ({w_r:.4g} p)"
+    extra = "".join(f", {k} = {v:g}" for k, v in pulse_params.items())
+    desc = f"{pulse} pulse a_p = {a_p:.4g} m/s² ({a_r:.4g} g tanα), ω_p = {omega_p:.4g} rad/s ({w_r:.4g} p){extra}"
     return exc, desc
 
 

@@ -58,14 +58,18 @@ import numpy as np
 from .._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
 from ..excitation import Record
 from ..geometry import G, Block, pulse_of_ratios
-from ..scene import (DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, PULSES, RECORD_ALIASES, TAN_ALPHA_MIN, builtin_record_names,
-                     is_builtin_record, model_kinds, model_params, parameter_table, parameters, pulse_class, takes)
+from ..scene import (DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, PULSE_PARAMS, PULSES, RECORD_ALIASES, TAN_ALPHA_MIN, builtin_record_names,
+                     is_builtin_record, model_kinds, model_params, parameter_table, parameters, pulse_class, pulse_params,
+                     pulse_takes, takes)
 from ..results import RESULT_COLUMNS, summary_doc
 from .tables import csv_text
 
 __doc__ = (__doc__.replace("<the scene's parameters: `jaxrock.scene.parameter_table()`>", parameter_table())
            .replace("<the summary outputs: `jaxrock.results.summary_doc()`>", summary_doc()))
-INPUT_COLUMNS = tuple(p.name.lower() for p in parameters())  # lower-cased, as the header's names are read
+def input_columns() -> tuple[str, ...]:
+    """The columns a scenes file may have, lower-cased as the header's names are read (a kind
+    registered since adds its parameters)."""
+    return tuple(p.name.lower() for p in parameters())
 # Columns copied to the results unchanged (labels); any other unknown column is an error naming
 # the closest known one (a typo such as `modle` ran the rigid model in silence).
 PASS_THROUGH = ("id", "name", "label", "group", "note", "notes", "comment")
@@ -170,6 +174,9 @@ def scene_model(kind: str, block: Block, **parameters):
     extra = sorted(set(given) - set(entry.parameters))
     if extra:
         raise JaxrockInputError(f"{', '.join(extra)}: not a parameter of model {kind} (it takes {', '.join(entry.parameters) or 'none'})")
+    for name, p in entry.params.items():  # against the kind's own declaration (concrete values; a vmapped row is checked before)
+        if name in given:
+            check_range(name, given[name], p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open)
     return entry.model(block, **given)
 
 
@@ -228,7 +235,9 @@ class Scenes:
     def excitation(self, exc: str, idx) -> object:
         """The stacked excitations of rows `idx` (all of excitation kind `exc`)."""
         if exc in PULSES:
-            return jax.vmap(pulse_class(exc))(jnp.asarray(self.params["a_p"][idx]), jnp.asarray(self.params["omega_p"][idx]))
+            kw = {k: jnp.asarray(self.params[k][idx]) for k in PULSE_PARAMS.get(exc, {})}
+            return jax.vmap(lambda a, w, kw: pulse_class(exc)(a, w, **kw))(jnp.asarray(self.params["a_p"][idx]),
+                                                                           jnp.asarray(self.params["omega_p"][idx]), kw)
         n = max(self.records[i].n for i in idx)  # records of distinct lengths, padded to one: one program
         return stack([self.records[i].padded(n, "record").scaled(self.params["scale"][i]) for i in idx])
 
@@ -299,6 +308,17 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
         t.fail(~is_pulse & t.has(col), col, f"applies only to pulses (pulse = {' / '.join(PULSES)}), not to a record")
     scale = t.num("scale", 0.0, math.inf, hi_open=True, rows=~is_pulse)
     params.update(a_p=a_p, omega_p=w_p, scale=np.where(np.isnan(scale), 1.0, scale))
+    for name, shared in pulse_params().items():  # the pulse kinds' own parameters, as each row's kind declares them
+        col, kinds = name.lower(), pulse_takes(name)
+        t.fail(t.has(col) & ~np.isin(exc, kinds), col, lambda i: f"applies only to pulse {' / '.join(kinds)}, not {exc[i]}")
+        value = np.full(t.n, np.nan)
+        for k in kinds:
+            rows = exc == k
+            p = PULSE_PARAMS[k][name]
+            x = t.num(col, p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open, rows=rows)
+            t.fail(p.off_step(x), col, lambda i: f"{x[i]:g}; valid: {p.range_text}")
+            value = np.where(rows, np.where(np.isnan(x), p.default, x), value)
+        params[name] = np.where(np.isnan(value), shared.default, value)
 
     groups: dict = {}
     for i, key in enumerate(zip(kind.tolist(), exc.tolist())):
@@ -337,12 +357,13 @@ def read_scenes(path) -> Scenes:
         dup = sorted({k for k in keys if keys.count(k) > 1 and k})
         if dup:
             raise JaxrockInputError(f"{path}: line 1: column(s) {dup} appear more than once")
+        columns = input_columns()
         for h, k in zip(header, keys):
-            if k not in INPUT_COLUMNS and k not in PASS_THROUGH and not k.startswith(PASS_THROUGH_PREFIX):
-                close = difflib.get_close_matches(k, INPUT_COLUMNS + PASS_THROUGH, n=1, cutoff=0.6)
+            if k not in columns and k not in PASS_THROUGH and not k.startswith(PASS_THROUGH_PREFIX):
+                close = difflib.get_close_matches(k, columns + PASS_THROUGH, n=1, cutoff=0.6)
                 hint = f"did you mean '{close[0]}'? " if close else ""
                 raise JaxrockInputError(
-                    f"{path}: line 1: unknown column {h!r}; {hint}valid: {', '.join(INPUT_COLUMNS)}; "
+                    f"{path}: line 1: unknown column {h!r}; {hint}valid: {', '.join(columns)}; "
                     f"copied through: {', '.join(PASS_THROUGH)} or any name starting with '{PASS_THROUGH_PREFIX}'")
         if "height" not in keys:
             raise JaxrockInputError(
@@ -367,4 +388,4 @@ def read_scenes(path) -> Scenes:
     return Scenes(header, np.asarray(rows), values, groups, params, records)
 
 
-__all__ = ["read_scenes", "Scenes", "scene_model", "INPUT_COLUMNS", "RESULT_COLUMNS"]
+__all__ = ["read_scenes", "Scenes", "scene_model", "input_columns", "RESULT_COLUMNS"]
