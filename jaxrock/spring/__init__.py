@@ -51,7 +51,8 @@ The package, one module per concept:
 - `column`: the column's material and section (`Column`) and its closed forms (eqs. 9, 17, 21);
 - `beam`: the corotational Euler–Bernoulli elements of a flexible column;
 - `base_spring`: the base spring's backbones (`Bilinear`, `Tanh`) and the damper (eq. 18);
-- `system`: the assembled system of one scene (`SpringSystem`, `assemble`);
+- `system`: the assembled system of one scene (`QuasiRigidSystem` or `FlexibleSystem`, both an
+  `AbstractSpringSystem`, also named `SpringSystem`; `assemble`);
 - `model`: the model value (`SpringModel`) and its scenes-file kinds;
 - `rest`: the quasi-rigid model's linear pre-yield phase stepped exactly to its first yield (the
   diffrax integrator's start on a kinked spring);
@@ -66,11 +67,14 @@ from .checked import Checked, CheckedStepper
 from .diffrax_integrator import DiffraxSpringStepper, SpringIntegrator
 from .generalized_alpha import GeneralizedAlpha, GeneralizedAlphaStepper
 from .model import SpringModel
-from .system import HISTORY_FIELDS, SpringSystem, assemble
+from .system import HISTORY_FIELDS, AbstractSpringSystem, FlexibleSystem, QuasiRigidSystem, SpringSystem, assemble
 
 __all__ = [
     "SpringModel",
     "SpringSystem",
+    "AbstractSpringSystem",
+    "QuasiRigidSystem",
+    "FlexibleSystem",
     "SpringIntegrator",
     "GeneralizedAlpha",
     "Checked",

@@ -34,6 +34,7 @@ from .._validate import JaxrockInputError
 from ..model import AbstractSpringIntegrator, AbstractStepper, Schedule
 from ..results import Solution, Status
 from .generalized_alpha import GeneralizedAlpha
+from .system import FlexibleSystem
 
 
 class Checked(AbstractSpringIntegrator):
@@ -88,7 +89,7 @@ class Checked(AbstractSpringIntegrator):
         without the limit, 6.4e-4 with it; the command line's `--tol 1e-6` grid flagged a cell
         needlessly)."""
         companion = self.companion
-        if isinstance(companion, GeneralizedAlpha) and system.n is not None:
+        if isinstance(companion, GeneralizedAlpha) and isinstance(system, FlexibleSystem):
             companion = dataclasses.replace(companion, crossing=None)
         return companion
 

@@ -35,7 +35,7 @@ from .._rootfind import SafeNewton
 from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, WrappedController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
 from .rest import rest_grid, rest_phase, rest_states
-from .system import SpringSystem
+from .system import FlexibleSystem, QuasiRigidSystem, SpringSystem
 
 if TYPE_CHECKING:
     from .model import SpringModel
@@ -376,7 +376,7 @@ class DiffraxSpringStepper(AbstractStepper):
         exact pre-yield phase (`jaxrock.spring.rest`) on an excitation with an exact grid
         (`rest_grid`)."""
         s = self.system
-        return self.integrator.exact_rest and self.kinked and s.n is None and not s.fixed_base and not s.track_energy
+        return self.integrator.exact_rest and self.kinked and isinstance(s, QuasiRigidSystem) and not s.fixed_base and not s.track_energy
 
     def init(self, excitation) -> _Carry:
         system = self.system

@@ -71,7 +71,7 @@ from .._validate import JaxrockInputError
 from ..bookkeeping import Record
 from ..model import AbstractModel, AbstractSpringIntegrator, AbstractStepper, Schedule, check_autodiff
 from ..results import Save, Solution, Status
-from .system import SpringSystem
+from .system import FlexibleSystem, QuasiRigidSystem, SpringSystem
 
 
 # Attempted steps per loop step (`GeneralizedAlphaStepper.step`): a run's record of its step ends
@@ -274,7 +274,7 @@ class GeneralizedAlphaStepper(AbstractStepper):
         # that leaves it is replaced by one that ends on the kink (`attempt`): no step straddles it
         kinked = mech.backbone.kinked and not clamp
         c_base = jnp.zeros((), dtype) if clamp else mech.c  # the base damper in the tangent
-        a1_ray = jnp.zeros((), dtype) if mech.a1 is None else mech.a1
+        a1_ray = mech.a1 if isinstance(mech, FlexibleSystem) else jnp.zeros((), dtype)
 
         def tol_of(q_a, q_b):
             return ig.atol * scale + ig.rtol * jnp.maximum(jnp.abs(q_a), jnp.abs(q_b))

@@ -27,7 +27,7 @@ from .column import Column, cbar_eq17, pushover_eq9
 from .diffrax_integrator import SpringIntegrator
 from .checked import Checked
 from .generalized_alpha import GeneralizedAlpha
-from .system import ENERGY_FIELDS, HISTORY_FIELDS, SpringSystem, assemble
+from .system import ENERGY_FIELDS, HISTORY_FIELDS, QuasiRigidSystem, SpringSystem, assemble
 
 
 
@@ -264,7 +264,7 @@ class SpringModel(AbstractModel):
 @eqx.filter_jit
 def _pushover(system: SpringSystem, theta):
     """`SpringModel.pushover` on the assembled system (compiled once per column structure)."""
-    if system.n is None:
+    if isinstance(system, QuasiRigidSystem):
         f = lambda th: jax.grad(system.potential)(jnp.atleast_1d(th))[0] / (system.m * G * system.h * jnp.cos(th))
         return jnp.vectorize(f)(theta)
     r = system.r * G  # generalized force of a unit lateral acceleration ratio (F/(m g) = 1)

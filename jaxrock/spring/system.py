@@ -1,8 +1,11 @@
 """The spring model's assembled system: the arrays of one scene and the mechanics written on them
 (energies → forces by `jax.grad`, the first-order form for diffrax, the second-order pieces for
-generalized-α). Every integrator of the spring model takes a `SpringSystem`."""
+generalized-α). Every integrator of the spring model takes one: a `QuasiRigidSystem` or a
+`FlexibleSystem` (`AbstractSpringSystem`, also named `SpringSystem`)."""
 
 from __future__ import annotations
+
+import abc
 
 import equinox as eqx
 import jax
@@ -36,59 +39,119 @@ ENERGY_FIELDS = ("kinetic", "potential", "elastic", "dissipated", "damper", "ray
 WORK_FIELDS = ("damper", "rayleigh", "input")  # the work integrals tracked beside the state
 
 
-class SpringSystem(eqx.Module):
+class AbstractSpringSystem(eqx.Module):
     """The spring model assembled for a run (`SpringModel.system()`, built by `assemble`): every
     array a right-hand side needs, computed once per scene — a value, vmappable like the model.
+    Two final kinds (issue 57): `QuasiRigidSystem`, the one-DOF body, and `FlexibleSystem`, the
+    corotational beam column; what they share is written here on what each supplies (its column's
+    potential, forces, mass, rest state and tolerance scales).
 
-    - sizes: `n` elements (None: the one-DOF quasi-rigid body), `ndof`;
-    - mass: `m`, `Itot` (one-DOF inertia about the base centre), `M`, `rot_masses`, `Minv`
-      (flexible), `mass_times` (M x from its structure);
+    - sizes: `ndof`;
+    - mass: `m`, `Itot` (one-DOF inertia about the base centre), `mass_matrix`, `mass_times`;
     - base: `backbone`, `My`, `theta_s` (spring), `c` (damper, eq. 18), `fixed_base`;
-    - column: `EA`, `EI`, `a1` (Rayleigh), `q_eq`, `V_eq` (the gravity-preloaded rest state), `r`
-      (ground load vector);
-    - energies and forces: `potential`, `kinetic`, `rigid_potential`, `forces`,
+    - energies and forces: `potential`, `kinetic`, `elastic`, `rigid_potential`, `forces`,
       `forces_without_spring`, `base_moment`, the first-order `vector_field`;
-    - tangents for implicit steps: `mass_matrix`, `tangents` (K₀, C₀ at rest), `rotate`;
+    - tangents for implicit steps: `tangents` (K₀, C₀ at rest), `rotate`;
     - scales: `alpha_r`, `p_r`, `R_r`, `atol_scale` (tolerances per component), `deform_scale`;
     - state: `initial_state`, `split`, `history`;
     - the levels a run is watched against: `theta_up` (uplift), `settled` (a summary's stop)."""
 
-    n: int | None = eqx.field(static=True)  # None: one-DOF quasi-rigid
-    fixed_base: bool = eqx.field(static=True)
-    track_energy: bool = eqx.field(static=True)
-    backbone: AbstractBackbone = eqx.field(static=True)
-    h: Array
-    m: Array
-    My: Array
-    theta_s: Array
-    c: Array
-    alpha_r: Array
-    p_r: Array
-    R_r: Array
-    Itot: Array  # one-DOF inertia (also used for the rigid potential of the flexible model)
-    EA: Array | None
-    EI: Array | None
-    a1: Array | None
-    M: Array | None
-    rot_masses: Array | None  # the nodal rotational masses of M (`beam.mass_times`)
-    Minv: Array | None
-    q_eq: Array | None
-    V_eq: Array | None
-    r: Array | None  # ground load vector p (`beam.ground_load`): f_ext = −üg p
-    deform_scale: Array | float = 1.0  # fixed base: tolerance scales × (static drift / 2h α′)
+    fixed_base: eqx.AbstractVar[bool]
+    track_energy: eqx.AbstractVar[bool]
+    backbone: eqx.AbstractVar[AbstractBackbone]
+    h: eqx.AbstractVar[Array]
+    m: eqx.AbstractVar[Array]
+    My: eqx.AbstractVar[Array]
+    theta_s: eqx.AbstractVar[Array]
+    c: eqx.AbstractVar[Array]
+    alpha_r: eqx.AbstractVar[Array]
+    p_r: eqx.AbstractVar[Array]
+    R_r: eqx.AbstractVar[Array]
+    Itot: eqx.AbstractVar[Array]  # one-DOF inertia (also used for the rigid potential of the flexible model)
+    deform_scale: eqx.AbstractVar[Array | float]  # fixed base: tolerance scales × (static drift / 2h α′)
     # a kinked backbone's branch the run is on (`AbstractBackbone.kinked`; None: the whole backbone)
-    branch: Array | None = None
+    branch: eqx.AbstractVar[Array | None]
 
+    # -- what each kind supplies ------------------------------------------------------------------
     @property
+    @abc.abstractmethod
     def ndof(self) -> int:
-        return 1 if self.n is None else beam.n_dof(self.n)
+        """Degrees of freedom (q[0] = θ, the base rotation)."""
 
     @property
-    def settle_margin(self):
-        """Energy margin of a summary's settled test: exact for the one-DOF model; 10 % for the
-        flexural P-Δ softening of a flexible column."""
-        return 1.0 if self.n is None else 0.9
+    @abc.abstractmethod
+    def settle_margin(self) -> float:
+        """Energy margin of a summary's settled test (`settle_energy`)."""
 
+    @abc.abstractmethod
+    def _column_potential(self, q):
+        """Gravity (+ strain) potential of the column, spring excluded."""
+
+    @abc.abstractmethod
+    def _from_rest(self, V):
+        """A potential counted from the (preloaded) rest state."""
+
+    @abc.abstractmethod
+    def elastic(self, q):
+        """The column's strain energy from its preloaded rest state [J]."""
+
+    @abc.abstractmethod
+    def kinetic(self, v):
+        """Kinetic energy [J]."""
+
+    @abc.abstractmethod
+    def _column_terms(self, q, v, ug):
+        """(f_ext, f_col, f_dcol): the ground's load, the column's conservative force and its
+        deformation damping at ground acceleration `ug`."""
+
+    @abc.abstractmethod
+    def mass_matrix(self):
+        """M (N × N)."""
+
+    @abc.abstractmethod
+    def mass_times(self, x):
+        """`mass_matrix() @ x`, from the matrix's structure."""
+
+    @abc.abstractmethod
+    def _accelerate(self, f):
+        """M⁻¹ f."""
+
+    @abc.abstractmethod
+    def _rest_q(self):
+        """q at rest (θ = 0, preloaded)."""
+
+    @abc.abstractmethod
+    def _damping_at_rest(self, q0):
+        """The column's deformation damping matrix at `q0` (spring damper excluded)."""
+
+    @abc.abstractmethod
+    def rotate(self, x, theta):
+        """Tangent vectors of the column rotated rigidly by θ about the base (T(θ) x). The strain
+        energy is invariant under the rigid rotation, so its Hessian there is T K₀ Tᵀ, and M and
+        the deformation damping are invariant: the tangent at a rocked configuration is the rest
+        tangent rotated."""
+
+    @abc.abstractmethod
+    def _rayleigh_power(self, v, f_damp, damper):
+        """The column's Rayleigh power [W] (the rest of v·f_damp beyond the damper's)."""
+
+    @abc.abstractmethod
+    def _rotated_rest(self, theta0, theta_dot0):
+        """(q, v): the rest state rotated rigidly by θ0 with angular velocity θ̇0."""
+
+    @abc.abstractmethod
+    def _q_scale(self):
+        """Per-coordinate size of a rocking motion: α′ for rotations, 2h α′ for displacements."""
+
+    @abc.abstractmethod
+    def top_displacement(self, q):
+        """Horizontal displacement of the column's top [m]."""
+
+    @abc.abstractmethod
+    def _section_moment(self, t, q, v, excitation):
+        """Bending moment of the column's base section [N·m]."""
+
+    # -- shared mechanics -------------------------------------------------------------------------
     def settle_energy(self, peak):
         """`settle_margin` × the rigid potential at the peak |θ| so far: below this mechanical energy
         |θ| can never reach that peak again (`jaxrock.spring`)."""
@@ -117,7 +180,7 @@ class SpringSystem(eqx.Module):
         """The branch of a kinked backbone at θ: 0 pre-yield (|θ| ≤ θs), else sign θ."""
         return jnp.where(jnp.abs(theta) <= self.theta_s, 0.0, jnp.sign(theta))
 
-    def on_branch(self, branch) -> "SpringSystem":
+    def on_branch(self, branch) -> "AbstractSpringSystem":
         """This system with its spring continued from `branch` (`moment_on_branch`)."""
         return eqx.tree_at(lambda s: s.branch, self, jnp.asarray(branch, self.theta_s.dtype), is_leaf=lambda x: x is None)
 
@@ -125,22 +188,12 @@ class SpringSystem(eqx.Module):
         """How far θ lies inside `branch` (0: |θ| < θs; ±1: ±θ > θs) [rad]: it falls through 0 at the kink."""
         return jnp.where(branch == 0, self.theta_s - jnp.abs(theta), branch * theta - self.theta_s)
 
-    def _column_potential(self, q):
-        """Gravity (+ strain) potential of the column, spring excluded."""
-        if self.n is None:
-            return self.m * G * self.h * (jnp.cos(q[0]) - 1.0)
-        V = beam.strain_energy(q, self.h, self.n, self.EA, self.EI)
-        V = V + beam.gravity_potential(q, self.h, self.n, self.m)
-        return V
-
     def potential(self, q):
         """Total potential relative to the (preloaded) rest state [J]."""
         V = self._column_potential(q)
         if not self.fixed_base:
             V = V + self.spring_potential(q[0])
-        if self.n is not None:
-            V = V - self.V_eq
-        return V
+        return self._from_rest(V)
 
     def rigid_potential(self, theta):
         """One-DOF SM potential at zero velocity (exact for the quasi-rigid scene):
@@ -148,41 +201,10 @@ class SpringSystem(eqx.Module):
         as θs → 0 (for a plain block, My = m g R sinα and h = R cosα)."""
         return self.spring_potential(theta) - self.m * G * self.h * (1 - jnp.cos(theta))
 
-    def elastic(self, q):
-        """The column's strain energy from its preloaded rest state [J] (0 for the one-DOF body)."""
-        if self.n is None:
-            return jnp.zeros(())
-        rest = beam.strain_energy(self.q_eq, self.h, self.n, self.EA, self.EI)
-        return beam.strain_energy(q, self.h, self.n, self.EA, self.EI) - rest
-
-    def kinetic(self, v):
-        if self.n is None:
-            return 0.5 * self.Itot * v[0] ** 2
-        return 0.5 * v @ self.mass_times(v)
-
     # -- forces -----------------------------------------------------------------------------------
-    def _column_damping(self, q, v):
-        """Rayleigh force a₁ Jᵀ K_e J v on the local deformations (never on rigid motion)."""
-        return self._column_forces(q, v)[1]
-
-    def _column_forces(self, q, v):
-        """(−∇V_column, Rayleigh force a₁ Jᵀ K_e J v): the strain energy's gradient and the
-        deformation damping in closed form (`beam.internal_forces`); the gravity force is constant
-        (the potential is linear in the heights)."""
-        g_el, g_d = beam.internal_forces(q, v, self.h, self.n, self.EA, self.EI, self.a1)
-        g_grav = jax.grad(beam.gravity_potential)(q, self.h, self.n, self.m)
-        return -(g_el + g_grav), g_d
-
     def forces(self, t, q, v, excitation):
         """(f_total, f_ext, f_damp, f_nospring): generalised forces [N, N·m]."""
-        ug = excitation(t)
-        if self.n is None:
-            f_ext = jnp.atleast_1d(-self.m * ug * self.h * jnp.cos(q[0]))  # eq. 10 right-hand side
-            f_col = -jax.grad(self._column_potential)(q)
-            f_dcol = jnp.zeros_like(q)
-        else:
-            f_ext = -ug * self.r
-            f_col, f_dcol = self._column_forces(q, v)
+        f_ext, f_col, f_dcol = self._column_terms(q, v, excitation(t))
         f_nospring = f_ext + f_col - f_dcol
         if self.fixed_base:
             f_sp = jnp.zeros_like(q)
@@ -206,39 +228,15 @@ class SpringSystem(eqx.Module):
             f_total = f_total.at[0].add(self.spring_moment(q[0]))
         return f_total, f_ext, f_damp
 
-    def mass_matrix(self):
-        return jnp.reshape(self.Itot, (1, 1)) if self.n is None else self.M
-
-    def mass_times(self, x):
-        """`mass_matrix() @ x`, from the matrix's structure (`beam.mass_times`)."""
-        return self.Itot * x if self.n is None else beam.mass_times(x, self.n, self.m, self.rot_masses)
-
     def tangents(self):
         """(K₀, C₀): stiffness (Hessian of the column potential, spring excluded) and damping
         (Rayleigh on the deformations + the base damper) at the preloaded rest state."""
-        N = self.ndof
-        q0 = jnp.zeros(N) if self.n is None else self.q_eq
+        q0 = self._rest_q()
         K0 = jax.hessian(self._column_potential)(q0)
-        if self.n is None:
-            C0 = jnp.zeros((1, 1))
-        else:
-            C0 = jax.jacfwd(lambda v: self._column_damping(q0, v))(jnp.zeros(N))
+        C0 = self._damping_at_rest(q0)
         if not self.fixed_base:
             C0 = C0.at[0, 0].add(self.c)
         return K0, C0
-
-    def rotate(self, x, theta):
-        """Tangent vectors of the column rotated rigidly by θ about the base (T(θ) x: each node's
-        (u_x, u_y) turned by θ; rotations unchanged). The strain energy is invariant under the
-        rigid rotation, so its Hessian there is T K₀ Tᵀ, and M and the deformation damping are
-        invariant: the tangent at a rocked configuration is the rest tangent rotated."""
-        if self.n is None:
-            return x
-        c, s = jnp.cos(theta), jnp.sin(theta)
-        rest = x[1:].reshape(self.n, 3)
-        ux, uy = rest[:, 0], rest[:, 1]
-        rest = jnp.stack([c * ux + s * uy, -s * ux + c * uy, rest[:, 2]], axis=1)
-        return jnp.concatenate([x[:1], rest.reshape(-1)])
 
     # -- first-order form -------------------------------------------------------------------------
     def split(self, y):
@@ -248,10 +246,7 @@ class SpringSystem(eqx.Module):
     def vector_field(self, t, y, excitation):
         q, v = self.split(y)
         f, f_ext, f_damp, _ = self.forces(t, q, v, excitation)
-        if self.n is None:
-            a = f / self.Itot
-        else:
-            a = self.Minv @ f
+        a = self._accelerate(f)
         if self.fixed_base:
             a = a.at[0].set(0.0)
         parts = [v, a]
@@ -263,23 +258,11 @@ class SpringSystem(eqx.Module):
         """The rates of the work integrals `WORK_FIELDS` [W]: the damper's c θ̇², the column's
         Rayleigh v·f_R (the rest of v·f_damp) and the ground's v·f_ext."""
         damper = jnp.zeros(()) if self.fixed_base else self.c * v[0] ** 2
-        rayleigh = jnp.zeros(()) if self.n is None else v @ f_damp - damper
-        return jnp.stack([damper, rayleigh, v @ f_ext])
+        return jnp.stack([damper, self._rayleigh_power(v, f_damp, damper), v @ f_ext])
 
     def initial_state(self, theta0=0.0, theta_dot0=0.0):
-        theta0 = jnp.asarray(theta0, dtype=float)
-        theta_dot0 = jnp.asarray(theta_dot0, dtype=float)
-        if self.n is None:
-            q = jnp.atleast_1d(theta0)
-            v = jnp.atleast_1d(theta_dot0)
-        else:
-            x, y, phi = beam.positions(self.q_eq, self.h, self.n)
-            c, s = jnp.cos(theta0), jnp.sin(theta0)
-            # clockwise rigid rotation about the base (top moves to +x for θ0 > 0)
-            xr, yr = x * c + y * s, -x * s + y * c
-            q = beam.from_positions(xr, yr, phi + theta0, self.h, self.n)
-            # rigid angular velocity ω0: ẋ = ω0 y, ẏ = −ω0 x, φ̇ = ω0
-            v = beam.from_positions(theta_dot0 * yr, -theta_dot0 * xr + beam.node_heights(self.h, self.n), jnp.full_like(phi, theta_dot0), self.h, self.n)
+        """y at rest (gravity-preloaded column) rotated rigidly by θ0 with angular velocity θ̇0."""
+        q, v = self._rotated_rest(jnp.asarray(theta0, dtype=float), jnp.asarray(theta_dot0, dtype=float))
         y0 = [q, v]
         if self.track_energy:
             y0.append(jnp.zeros(len(WORK_FIELDS)))
@@ -291,12 +274,7 @@ class SpringSystem(eqx.Module):
         rocking motion. A fixed-base column never rocks: all scales shrink by its static drift under
         m g tanα′ over 2h α′ (`deform_scale`; 1/473 for the figure-17 chimney), so that its
         vibration, not a rocking it cannot do, sets the tolerance."""
-        if self.n is None:
-            sq = jnp.ones(1) * self.alpha_r
-        else:
-            unit = jnp.tile(jnp.array([2.0, 2.0, 0.0]), self.n)
-            sq = jnp.concatenate([jnp.zeros(1), unit])
-            sq = jnp.where(sq > 0, self.h * sq, 1.0) * self.alpha_r
+        sq = self._q_scale()
         parts = [sq, sq * self.p_r]
         if self.track_energy:
             parts.append(jnp.ones(len(WORK_FIELDS)) * self.m * G * self.R_r * self.alpha_r)
@@ -317,15 +295,13 @@ class SpringSystem(eqx.Module):
             elif name == "theta_dot":
                 out[name] = theta_dot
             elif name == "u_top":
-                out[name] = 2 * self.h * jnp.sin(theta) if self.n is None else beam.top_displacement(q, self.h, self.n)
+                out[name] = self.top_displacement(q)
             elif name == "w_top":
-                u = 2 * self.h * jnp.sin(theta) if self.n is None else beam.top_displacement(q, self.h, self.n)
-                out[name] = u - 2 * self.h * jnp.sin(theta)
+                out[name] = self.top_displacement(q) - 2 * self.h * jnp.sin(theta)
             elif name == "base_moment":
                 out[name] = self.base_moment(t, q, v, excitation)
-            elif name == "section_moment":  # the one-DOF column transmits the base moment
-                out[name] = (self.base_moment(t, q, v, excitation) if self.n is None
-                             else beam.base_section_moment(q, v, self.h, self.n, self.EA, self.EI, self.a1))
+            elif name == "section_moment":
+                out[name] = self._section_moment(t, q, v, excitation)
             elif name == "kinetic":
                 out[name] = self.kinetic(v)
             elif name == "potential":
@@ -339,9 +315,198 @@ class SpringSystem(eqx.Module):
         return out
 
 
+SpringSystem = AbstractSpringSystem  # the name before the split (issue 57): either kind
 
-def assemble(model, track_energy: bool = False) -> SpringSystem:
-    """Assemble the `SpringSystem` of a `SpringModel`: mass, yield moment and pre-yield rotation,
+
+class QuasiRigidSystem(AbstractSpringSystem):
+    """The one-DOF quasi-rigid body on its spring: q = [θ]."""
+
+    fixed_base: bool = eqx.field(static=True)
+    track_energy: bool = eqx.field(static=True)
+    backbone: AbstractBackbone = eqx.field(static=True)
+    h: Array
+    m: Array
+    My: Array
+    theta_s: Array
+    c: Array
+    alpha_r: Array
+    p_r: Array
+    R_r: Array
+    Itot: Array
+    deform_scale: Array | float = eqx.field(default=1.0, kw_only=True)
+    branch: Array | None = eqx.field(default=None, kw_only=True)
+
+    @property
+    def ndof(self) -> int:
+        return 1
+
+    @property
+    def settle_margin(self) -> float:
+        return 1.0  # exact for the one-DOF model
+
+    def _column_potential(self, q):
+        return self.m * G * self.h * (jnp.cos(q[0]) - 1.0)
+
+    def _from_rest(self, V):
+        return V
+
+    def elastic(self, q):
+        return jnp.zeros(())
+
+    def kinetic(self, v):
+        return 0.5 * self.Itot * v[0] ** 2
+
+    def _column_terms(self, q, v, ug):
+        f_ext = jnp.atleast_1d(-self.m * ug * self.h * jnp.cos(q[0]))  # eq. 10 right-hand side
+        return f_ext, -jax.grad(self._column_potential)(q), jnp.zeros_like(q)
+
+    def mass_matrix(self):
+        return jnp.reshape(self.Itot, (1, 1))
+
+    def mass_times(self, x):
+        return self.Itot * x
+
+    def _accelerate(self, f):
+        return f / self.Itot
+
+    def _rest_q(self):
+        return jnp.zeros(1)
+
+    def _damping_at_rest(self, q0):
+        return jnp.zeros((1, 1))
+
+    def rotate(self, x, theta):
+        return x
+
+    def _rayleigh_power(self, v, f_damp, damper):
+        return jnp.zeros(())
+
+    def _rotated_rest(self, theta0, theta_dot0):
+        return jnp.atleast_1d(theta0), jnp.atleast_1d(theta_dot0)
+
+    def _q_scale(self):
+        return jnp.ones(1) * self.alpha_r
+
+    def top_displacement(self, q):
+        return 2 * self.h * jnp.sin(q[0])
+
+    def _section_moment(self, t, q, v, excitation):
+        return self.base_moment(t, q, v, excitation)  # the one-DOF column transmits the base moment
+
+
+class FlexibleSystem(AbstractSpringSystem):
+    """The corotational Euler–Bernoulli column of `n` elements on its spring (`beam`): q = [θ, then
+    (u_x, u_y, φ) per node above the base]."""
+
+    n: int = eqx.field(static=True)
+    fixed_base: bool = eqx.field(static=True)
+    track_energy: bool = eqx.field(static=True)
+    backbone: AbstractBackbone = eqx.field(static=True)
+    h: Array
+    m: Array
+    My: Array
+    theta_s: Array
+    c: Array
+    alpha_r: Array
+    p_r: Array
+    R_r: Array
+    Itot: Array
+    EA: Array
+    EI: Array
+    a1: Array  # Rayleigh, stiffness proportional
+    M: Array
+    rot_masses: Array  # the nodal rotational masses of M (`beam.mass_times`)
+    Minv: Array
+    q_eq: Array  # the gravity-preloaded rest state
+    V_eq: Array
+    r: Array  # ground load vector p (`beam.ground_load`): f_ext = −üg p
+    deform_scale: Array | float = eqx.field(default=1.0, kw_only=True)
+    branch: Array | None = eqx.field(default=None, kw_only=True)
+
+    @property
+    def ndof(self) -> int:
+        return beam.n_dof(self.n)
+
+    @property
+    def settle_margin(self) -> float:
+        return 0.9  # 10 % for the flexural P-Δ softening of a flexible column
+
+    def _column_potential(self, q):
+        V = beam.strain_energy(q, self.h, self.n, self.EA, self.EI)
+        V = V + beam.gravity_potential(q, self.h, self.n, self.m)
+        return V
+
+    def _from_rest(self, V):
+        return V - self.V_eq
+
+    def elastic(self, q):
+        rest = beam.strain_energy(self.q_eq, self.h, self.n, self.EA, self.EI)
+        return beam.strain_energy(q, self.h, self.n, self.EA, self.EI) - rest
+
+    def kinetic(self, v):
+        return 0.5 * v @ self.mass_times(v)
+
+    def _column_forces(self, q, v):
+        """(−∇V_column, Rayleigh force a₁ Jᵀ K_e J v): the strain energy's gradient and the
+        deformation damping in closed form (`beam.internal_forces`); the gravity force is constant
+        (the potential is linear in the heights)."""
+        g_el, g_d = beam.internal_forces(q, v, self.h, self.n, self.EA, self.EI, self.a1)
+        g_grav = jax.grad(beam.gravity_potential)(q, self.h, self.n, self.m)
+        return -(g_el + g_grav), g_d
+
+    def _column_terms(self, q, v, ug):
+        f_col, f_dcol = self._column_forces(q, v)
+        return -ug * self.r, f_col, f_dcol
+
+    def mass_matrix(self):
+        return self.M
+
+    def mass_times(self, x):
+        return beam.mass_times(x, self.n, self.m, self.rot_masses)
+
+    def _accelerate(self, f):
+        return self.Minv @ f
+
+    def _rest_q(self):
+        return self.q_eq
+
+    def _damping_at_rest(self, q0):
+        return jax.jacfwd(lambda v: self._column_forces(q0, v)[1])(jnp.zeros(self.ndof))
+
+    def rotate(self, x, theta):
+        c, s = jnp.cos(theta), jnp.sin(theta)
+        rest = x[1:].reshape(self.n, 3)
+        ux, uy = rest[:, 0], rest[:, 1]
+        rest = jnp.stack([c * ux + s * uy, -s * ux + c * uy, rest[:, 2]], axis=1)
+        return jnp.concatenate([x[:1], rest.reshape(-1)])
+
+    def _rayleigh_power(self, v, f_damp, damper):
+        return v @ f_damp - damper
+
+    def _rotated_rest(self, theta0, theta_dot0):
+        x, y, phi = beam.positions(self.q_eq, self.h, self.n)
+        c, s = jnp.cos(theta0), jnp.sin(theta0)
+        # clockwise rigid rotation about the base (top moves to +x for θ0 > 0)
+        xr, yr = x * c + y * s, -x * s + y * c
+        q = beam.from_positions(xr, yr, phi + theta0, self.h, self.n)
+        # rigid angular velocity ω0: ẋ = ω0 y, ẏ = −ω0 x, φ̇ = ω0
+        v = beam.from_positions(theta_dot0 * yr, -theta_dot0 * xr + beam.node_heights(self.h, self.n), jnp.full_like(phi, theta_dot0), self.h, self.n)
+        return q, v
+
+    def _q_scale(self):
+        unit = jnp.tile(jnp.array([2.0, 2.0, 0.0]), self.n)
+        sq = jnp.concatenate([jnp.zeros(1), unit])
+        return jnp.where(sq > 0, self.h * sq, 1.0) * self.alpha_r
+
+    def top_displacement(self, q):
+        return beam.top_displacement(q, self.h, self.n)
+
+    def _section_moment(self, t, q, v, excitation):
+        return beam.base_section_moment(q, v, self.h, self.n, self.EA, self.EI, self.a1)
+
+
+def assemble(model, track_energy: bool = False) -> AbstractSpringSystem:
+    """Assemble the system of a `SpringModel` (`QuasiRigidSystem`, `FlexibleSystem`): mass, yield moment and pre-yield rotation,
     damper (eq. 18), inertia; for a flexible column the mass matrix and its inverse, the Rayleigh
     coefficient, the gravity-preloaded rest state (Newton on ∇V = 0) and, for a fixed base, the
     tolerance scale of its static drift."""
@@ -366,7 +531,7 @@ def assemble(model, track_energy: bool = False) -> SpringSystem:
         Itot=Itot,
     )
     if model.column is None:
-        return SpringSystem(n=None, EA=None, EI=None, a1=None, M=None, rot_masses=None, Minv=None, q_eq=None, V_eq=None, r=None, **common)
+        return QuasiRigidSystem(**common)
     n = model.n_elements
     A, I = model.column.section(blk)
     EA, EI = model.column.E * A, model.column.E * I
@@ -375,7 +540,8 @@ def assemble(model, track_energy: bool = False) -> SpringSystem:
     Minv = _linalg.inv(M)
     Minv = 0.5 * (Minv + Minv.T)
     _, a1 = model.rayleigh()
-    sys_ = SpringSystem(n=n, EA=EA, EI=EI, a1=a1, M=M, rot_masses=rot_masses, Minv=Minv, q_eq=jnp.zeros(beam.n_dof(n)), V_eq=jnp.zeros(()), r=beam.ground_load(n, m), **common)
+    sys_ = FlexibleSystem(n=n, EA=EA, EI=EI, a1=a1, M=M, rot_masses=rot_masses, Minv=Minv, q_eq=jnp.zeros(beam.n_dof(n)), V_eq=jnp.zeros(()),
+                          r=beam.ground_load(n, m), **common)
     # gravity preload: static equilibrium at θ = 0 (axial shortening), by Newton on ∇V = 0
     N = beam.n_dof(n)
     grad_v = jax.grad(sys_._column_potential)
