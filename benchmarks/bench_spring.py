@@ -90,7 +90,7 @@ def scene(name, model, sc, wr, ar, n_os, rng, ref_integrator, check_integrator, 
     blk = model.block
     p, ta = float(blk.p_r), float(jnp.tan(blk.alpha_r))
     out(f"\n## {name}: {len(ar)} x {len(wr)} grid, 2h = {float(blk.height):g} m, tanα = {ta:.3g}, "
-        f"p = {p:.4f} rad/s" + (f", E = {sc.E:g} Pa, {sc.n} elements" if model.column is not None else ", one-DOF"))
+        f"p = {p:.4f} rad/s" + (f", E = {sc.E:g} Pa, {sc.n} elements" if model.flexible else ", one-DOF"))
     W, A = np.meshgrid(wr, ar)
     a_all, w_all = (np.asarray(x).ravel() for x in jr.pulse_of_ratios(blk, A, W))
     t = time.perf_counter()

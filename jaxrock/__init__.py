@@ -39,7 +39,7 @@ _EXPORTS = {
     **dict.fromkeys(["ModelKind", "Param", "register_model_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"], "scene"),
     **dict.fromkeys(["Sensitivity", "verdict_uncertain"], "sensitivity"),
     **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
-    **dict.fromkeys(["SpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear",
+    **dict.fromkeys(["SpringModel", "AbstractSpringModel", "QuasiRigidSpringModel", "FlexibleSpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear",
                      "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
     **dict.fromkeys(["el_centro", "builtin_record", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",
@@ -76,7 +76,8 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
     from .sensitivity import Sensitivity as Sensitivity, verdict_uncertain as verdict_uncertain
     from .rigid import EventIntegrator as EventIntegrator, RigidModel as RigidModel
     from .spring import (
-        SpringModel as SpringModel, SpringSystem as SpringSystem, Column as Column, SpringIntegrator as SpringIntegrator,
+        SpringModel as SpringModel, AbstractSpringModel as AbstractSpringModel, QuasiRigidSpringModel as QuasiRigidSpringModel,
+        FlexibleSpringModel as FlexibleSpringModel, SpringSystem as SpringSystem, Column as Column, SpringIntegrator as SpringIntegrator,
         GeneralizedAlpha as GeneralizedAlpha, Checked as Checked, AbstractBackbone as AbstractBackbone, Bilinear as Bilinear,
         Tanh as Tanh, cbar_eq17 as cbar_eq17, first_period_eq21 as first_period_eq21, pushover_eq9 as pushover_eq9,
     )

@@ -122,7 +122,7 @@ def test_the_spring_models_report_it_too(model, integrator):
     s = jr.simulate(model, ex, integrator=integrator, sensitivity=True)
     same_summary(s, jr.simulate(model, ex, integrator=integrator))
     assert 0.0 < float(s.sensitivity) < 1e3
-    if model.column is None:
+    if not model.flexible:
         rigid = jr.simulate(jr.RigidModel(model.block), ex, sensitivity=True)
         assert abs(float(s.sensitivity) / float(rigid.sensitivity) - 1) < 0.2, (float(s.sensitivity), float(rigid.sensitivity))
 

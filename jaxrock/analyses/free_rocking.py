@@ -38,7 +38,7 @@ from jaxtyping import Array, Bool, Float
 from .._validate import JaxrockInputError, check_range
 from ..excitation import StillGround
 from ..geometry import Block
-from ..spring import Column, SpringIntegrator, SpringModel
+from ..spring import AbstractSpringModel, Column, SpringIntegrator, SpringModel
 
 
 #: Tolerances of the free-rocking solves: r_eq² to ~1e-8, so that finite differences and the
@@ -55,7 +55,8 @@ FLEXIBLE_CALIBRATION_INTEGRATOR = SpringIntegrator(rtol=1e-7, atol=1e-7, solver=
 
 def default_integrator(model_or_family):
     """Explicit Tsit5 for the quasi-rigid SM, the ESDIRK `SpringIntegrator` for flexible columns."""
-    return CALIBRATION_INTEGRATOR if model_or_family.column is None else FLEXIBLE_CALIBRATION_INTEGRATOR
+    flexible = model_or_family.column is not None if isinstance(model_or_family, SpringFamily) else model_or_family.flexible
+    return FLEXIBLE_CALIBRATION_INTEGRATOR if flexible else CALIBRATION_INTEGRATOR
 
 
 #: Figure 7 of the paper.
@@ -105,7 +106,7 @@ def free_cycle(
     amplitude (4 × the quarter time acosh(1/(1 − θ₀/α))/p′, + 4/p′); `found` is False if the peak
     was not reached by then (e.g. a heavily over-damped body that creeps to rest).
     """
-    if not isinstance(model, SpringModel):
+    if not isinstance(model, AbstractSpringModel):
         raise JaxrockInputError(f"model must be a SpringModel, got {type(model).__name__}")
     if integrator is None:
         integrator = default_integrator(model)
@@ -181,17 +182,10 @@ class SpringFamily(eqx.Module):
     def block(self, tan_alpha) -> Block:
         return Block.from_slenderness(self.height, tan_alpha, self.tan_alpha_base)
 
-    def __call__(self, tan_alpha, cbar) -> SpringModel:
-        return SpringModel(
-            self.block(tan_alpha),
-            self.column,
-            added_masses=self.added_masses,
-            cbar=cbar,
-            backbone=self.backbone,
-            smoothing=self.smoothing,
-            zeta=self.zeta,
-            n_elements=self.n_elements,
-        )
+    def __call__(self, tan_alpha, cbar) -> AbstractSpringModel:
+        column = {} if self.column is None else dict(zeta=self.zeta, n_elements=self.n_elements)
+        return SpringModel(self.block(tan_alpha), self.column, added_masses=self.added_masses, cbar=cbar, backbone=self.backbone,
+                           smoothing=self.smoothing, **column)
 
     def energy_ratio(self, tan_alpha, cbar, theta0_over_alpha, integrator: SpringIntegrator | None = None):
         """`energy_ratio` of the family's model at (tanα, c̄)."""

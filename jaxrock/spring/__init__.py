@@ -1,10 +1,11 @@
 """The nonlinear-elastic, viscously damped spring model (SM) of the paper (sections 3–6).
 
-Two scenes share one model value, `SpringModel`:
+Two final model kinds (`AbstractSpringModel`), each with its own system (`jaxrock.spring.system`);
+`SpringModel(block, column=None, ...)` makes either:
 
-- quasi-rigid (``column=None``): the one-DOF rigid SM, eq. 10 with the damper (SPEC)
+- quasi-rigid (`QuasiRigidSpringModel`, ``column=None``): the one-DOF rigid SM, eq. 10 with the damper (SPEC)
   ``Itot θ̈ + c θ̇ + M(θ) − m g h sinθ = −m üg h cosθ``, ``h = R cosα``; no mesh is built.
-- flexible (``column=Column(...)``): a corotational Euler–Bernoulli column of ``n_elements``
+- flexible (`FlexibleSpringModel`, ``column=Column(...)``): a corotational Euler–Bernoulli column of ``n_elements``
   elements (`jaxrock.spring.beam`) on the rotational spring, gravity preloaded, stiffness-proportional
   Rayleigh damping on the column's deformation (section 4).
 
@@ -66,11 +67,14 @@ from .column import Column, cbar_eq17, first_period_eq21, pushover_eq9
 from .checked import Checked, CheckedStepper
 from .diffrax_integrator import DiffraxSpringStepper, SpringIntegrator
 from .generalized_alpha import GeneralizedAlpha, GeneralizedAlphaStepper
-from .model import SpringModel
+from .model import AbstractSpringModel, FlexibleSpringModel, QuasiRigidSpringModel, SpringModel
 from .system import HISTORY_FIELDS, AbstractSpringSystem, FlexibleSystem, QuasiRigidSystem, SpringSystem, assemble
 
 __all__ = [
     "SpringModel",
+    "AbstractSpringModel",
+    "QuasiRigidSpringModel",
+    "FlexibleSpringModel",
     "SpringSystem",
     "AbstractSpringSystem",
     "QuasiRigidSystem",

@@ -336,7 +336,7 @@ class DiffraxSpringStepper(AbstractStepper):
     A history is one solve with the peak from the steps' Hermite interpolants."""
 
     integrator: "SpringIntegrator"
-    model: "SpringModel"
+    model: "AbstractSpringModel"
     system: SpringSystem
     save: Save | None
     t1: Array | None

@@ -1,11 +1,14 @@
-"""The spring model (`SpringModel`): the paper's parameters of one scene (geometry, column, damper,
-backbone, smoothing, damping, added masses) as a value, with its default integrator, its
-discretised column's period and Rayleigh coefficients, its static pushover, and the levels its runs
-are watched against. What a run integrates is its assembled `SpringSystem`
-(`jaxrock.spring.system`); the package docstring (`jaxrock.spring`) describes the model."""
+"""The spring model: the paper's parameters of one scene (geometry, damper, backbone, smoothing,
+added masses; a flexible column's material, damping and mesh) as a value, with its default
+integrator, its static pushover and the levels its runs are watched against. Two final kinds of
+`AbstractSpringModel`: `QuasiRigidSpringModel` and `FlexibleSpringModel` (with its discretised
+column's period and Rayleigh coefficients); `SpringModel(block, column=None, ...)` makes either.
+What a run integrates is its assembled system (`jaxrock.spring.system`); the package docstring
+(`jaxrock.spring`) describes the model."""
 
 from __future__ import annotations
 
+import abc
 import math
 
 import equinox as eqx
@@ -31,12 +34,13 @@ from .system import ENERGY_FIELDS, HISTORY_FIELDS, QuasiRigidSystem, SpringSyste
 
 
 
-class SpringModel(AbstractModel):
-    """The paper's spring model (SM), quasi-rigid (``column=None``) or flexible.
+class AbstractSpringModel(AbstractModel):
+    """The paper's spring model (SM): a column on a rigid-plastic spring with its damper (eq. 18)
+    at the base. Two final kinds (issue 57): `QuasiRigidSpringModel`, the one-DOF body, and
+    `FlexibleSpringModel`, a corotational Euler–Bernoulli column; `SpringModel(block, column=None,
+    ...)` makes either. Their shared fields (arrays are vmappable/differentiable leaves):
 
-    Fields (arrays are vmappable/differentiable leaves):
     - `block`: geometry (`Block`, with `b_base > b` for an extended rigid base, section 5);
-    - `column`: `Column` (E, ρ, optional A, I) or None for the one-DOF quasi-rigid SM;
     - `added_masses` (static): add ΔI = I′o − (4/3) m h² (SPEC; paper section 3.3);
     - `cbar`: damper coefficient c̄ (None: eq. 17 with α′, resolved at construction: always an array);
     - `backbone` (static): the spring's moment–rotation curve, `jaxrock.Bilinear` or
@@ -52,63 +56,44 @@ class SpringModel(AbstractModel):
       `Checked(GeneralizedAlpha(1e-6, 1e-6))` came near 1e-3 there at about twice the cost.
       Derivatives through the kinks are the motion's with either integrator (both end their steps
       on the kinks);
-    - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
-      at the first fixed-base period of the discretised column *with its added rotational masses*
-      (`first_period`; they lengthen it a little, `tests/test_spring.py`);
-    - `n_elements` (static), `fixed_base` (static: base rotation clamped, section 6);
+    - `fixed_base` (static: base rotation clamped, section 6);
     - `threshold`: overturned when |θ| ≥ threshold·α′ (an array).
     """
 
-    block: Block
-    column: Column | None
-    cbar: Float[Array, ""]
-    smoothing: Float[Array, ""]
-    zeta: Float[Array, ""]
-    threshold: Float[Array, ""]
-    backbone: AbstractBackbone = eqx.field(static=True)
-    added_masses: bool = eqx.field(static=True)
-    n_elements: int = eqx.field(static=True)
-    fixed_base: bool = eqx.field(static=True)
+    block: eqx.AbstractVar[Block]
+    cbar: eqx.AbstractVar[Float[Array, ""]]
+    smoothing: eqx.AbstractVar[Float[Array, ""]]
+    threshold: eqx.AbstractVar[Float[Array, ""]]
+    backbone: eqx.AbstractVar[AbstractBackbone]
+    added_masses: eqx.AbstractVar[bool]
+    fixed_base: eqx.AbstractVar[bool]
 
-    def __init__(
-        self,
-        block: Block,
-        column: Column | None = None,
-        *,
-        added_masses: bool = True,
-        cbar=None,
-        backbone: AbstractBackbone | str | None = None,
-        smoothing=None,
-        zeta=CONCRETE_ZETA,
-        n_elements: int = 10,
-        fixed_base: bool = False,
-        threshold=1.0,
-    ):
+    def _set_spring(self, block, flexible: bool, added_masses, cbar, backbone, smoothing, fixed_base, threshold):
+        """The shared fields, set by each kind's `__init__`."""
         if not isinstance(block, Block):
             raise JaxrockInputError(f"block must be a jaxrock.Block, got {type(block).__name__}")
-        if column is not None and not isinstance(column, Column):
-            raise JaxrockInputError(f"column must be a jaxrock Column or None, got {type(column).__name__}")
-        if not isinstance(n_elements, int) or isinstance(n_elements, bool) or n_elements < 1:
-            raise JaxrockInputError(f"n_elements = {n_elements!r}: must be an integer >= 1")
         self.block = block
-        self.column = column
         self.added_masses = bool(added_masses)
         self.cbar = cbar_eq17(block.alpha_r) if cbar is None else jnp.asarray(cbar, dtype=float)
-        backbone, smoothing = default_spring(column is not None, backbone, smoothing)
+        backbone, smoothing = default_spring(flexible, backbone, smoothing)
         self.backbone = as_backbone(backbone)
         self.smoothing = jnp.asarray(smoothing, dtype=float)
-        self.zeta = jnp.asarray(zeta, dtype=float)
-        self.n_elements = n_elements
         self.fixed_base = bool(fixed_base)
         self.threshold = jnp.asarray(threshold, dtype=float)
-        check_limits(self.limits())
 
-    def limits(self) -> tuple[Limit, ...]:
-        column = () if self.column is None else self.column.limits()
+    def _spring_limits(self) -> tuple[Limit, ...]:
         return (Limit("smoothing (theta_s/alpha)", self.smoothing, 0.0, 1.0, lo_open=True, hi_open=True),
-                Limit("zeta (column damping ratio)", self.zeta, 0.0, math.inf, hi_open=True),
                 Limit("threshold (overturning |theta|/alpha)", self.threshold, 0.0, 1.0, lo_open=True),
-                Limit("cbar (damper coefficient)", self.cbar, 0.0, math.inf, hi_open=True), *column)
+                Limit("cbar (damper coefficient)", self.cbar, 0.0, math.inf, hi_open=True))
+
+    @property
+    @abc.abstractmethod
+    def flexible(self) -> bool:
+        """Whether the column deforms (`FlexibleSpringModel`)."""
+
+    @abc.abstractmethod
+    def mass(self):
+        """Column mass m [kg] (per unit out-of-plane thickness for the default section)."""
 
     # -- AbstractModel --------------------------------------------------------------------------
     def default_integrator(self, autodiff: str | None = None) -> "SpringIntegrator | Checked":
@@ -137,60 +122,21 @@ class SpringModel(AbstractModel):
         `jax.grad` takes the reverse-mode form, the same values)."""
         if autodiff is not None:
             check_autodiff(autodiff)
-        if self.column is None:
-            # 20,000 steps (the class default) ended the 40-s packaged records B-ELC000 and A-TIN000
-            # (dt 0.005 s) in max_steps at every factor, the block at rest on its ringing spring
-            return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000,
-                                    autodiff=autodiff or "reverse")
-        return Checked(GeneralizedAlpha(rtol=1e-5, atol=1e-5, autodiff=autodiff or "forward"))
+        return self._default_integrator(autodiff)
+
+    @abc.abstractmethod
+    def _default_integrator(self, autodiff: str | None):
+        """`default_integrator` of this kind (`autodiff` checked)."""
 
     @property
     def history_fields(self) -> tuple[str, ...]:
         return HISTORY_FIELDS
 
-    @property
-    def flexible(self) -> bool:
-        return self.column is not None
-
-    # -- mass, period, damping, pushover -----------------------------------------------------------
-    def mass(self):
-        """Column mass m [kg] (per unit out-of-plane thickness for the default section)."""
-        if self.column is None:
-            return CONCRETE_RHO * 2 * self.block.b * 2 * self.block.h
-        A, _ = self.column.section(self.block)
-        return self.column.rho * A * 2 * self.block.h
-
+    # -- inertia, pushover -------------------------------------------------------------------------
     def total_inertia(self):
         """Itot about the base centre: (4/3) m h² (eq. 11), or I′o with added masses."""
         m, blk = self.mass(), self.block
         return m * blk.inertia_ratio if self.added_masses else (4.0 / 3.0) * m * blk.h**2
-
-    def rotational_masses(self):
-        """Rotational inertia at the n + 1 column nodes: ΔI/(n + 1) with the added masses, else the
-        section's rotary inertia ρ I L_trib (keeps M regular; Rayleigh beam)."""
-        blk, n = self.block, self.n_elements
-        if self.added_masses:
-            return jnp.full(n + 1, (self.total_inertia() - (4.0 / 3.0) * self.mass() * blk.h**2) / (n + 1))
-        _, I = self.column.section(blk)
-        le = 2 * blk.h / n
-        return self.column.rho * I * le * jnp.concatenate([jnp.full(1, 0.5), jnp.ones(n - 1), jnp.full(1, 0.5)])
-
-    def _require_column(self, what: str):
-        if self.column is None:
-            raise JaxrockInputError(f"{what}: the quasi-rigid SM (column=None) has no column; give a Column")
-
-    def first_period(self):
-        """First fixed-base period T₁ [s] of the discretised column with the model's rotational masses
-        (base rotation clamped, no gravity): the period ζ refers to (eq. 21 is the bare solid column's)."""
-        self._require_column("first_period")
-        A, I = self.column.section(self.block)
-        E = self.column.E
-        return beam.first_period(self.block.h, self.n_elements, self.mass(), E * A, E * I, self.rotational_masses())
-
-    def rayleigh(self):
-        """Rayleigh coefficients (a₀, a₁) of the column, C = a₀ M + a₁ K on its deformations:
-        stiffness proportional, a₀ = 0 and a₁ = ζ T₁/π (ζ = a₁ ω₁/2 at T₁ = `first_period`)."""
-        return jnp.zeros(()), self.zeta * self.first_period() / jnp.pi
 
     def pushover(self, theta):
         """The model's own static pushover: the lateral load F/(m g) that holds the column at base
@@ -204,8 +150,9 @@ class SpringModel(AbstractModel):
         return _pushover(self.system(), jnp.asarray(theta, dtype=float))
 
     def system(self, track_energy: bool = False) -> SpringSystem:
-        """The assembled system of this model (`SpringSystem`): its arrays computed once; with
-        `track_energy`, the work integrals (`system.WORK_FIELDS`: damper, Rayleigh, input) integrated alongside."""
+        """The assembled system of this model (`QuasiRigidSystem`, `FlexibleSystem`): its arrays
+        computed once; with `track_energy`, the work integrals (`system.WORK_FIELDS`: damper,
+        Rayleigh, input) integrated alongside."""
         return assemble(self, track_energy)
 
     # -- public pieces for calibration / custom solves --------------------------------------------
@@ -261,6 +208,133 @@ class SpringModel(AbstractModel):
                      overturn=self.overturn_rotation, uplift=system.theta_up)
 
 
+class QuasiRigidSpringModel(AbstractSpringModel):
+    """The one-DOF quasi-rigid SM (paper sections 3–4): a rigid column of concrete's density on the
+    spring (`AbstractSpringModel`'s fields; no column, no column damping)."""
+
+    block: Block
+    cbar: Float[Array, ""]
+    smoothing: Float[Array, ""]
+    threshold: Float[Array, ""]
+    backbone: AbstractBackbone = eqx.field(static=True)
+    added_masses: bool = eqx.field(static=True)
+    fixed_base: bool = eqx.field(static=True)
+
+    def __init__(self, block: Block, *, added_masses: bool = True, cbar=None, backbone: AbstractBackbone | str | None = None,
+                 smoothing=None, fixed_base: bool = False, threshold=1.0):
+        self._set_spring(block, False, added_masses, cbar, backbone, smoothing, fixed_base, threshold)
+        check_limits(self.limits())
+
+    def limits(self) -> tuple[Limit, ...]:
+        return self._spring_limits()
+
+    @property
+    def flexible(self) -> bool:
+        return False
+
+    def mass(self):
+        return CONCRETE_RHO * 2 * self.block.b * 2 * self.block.h
+
+    def first_period(self):
+        """Refused: the one-DOF body has no column to vibrate."""
+        raise JaxrockInputError("first_period: the quasi-rigid SM (column=None) has no column; give a Column")
+
+    def _default_integrator(self, autodiff):
+        # 20,000 steps (the class default) ended the 40-s packaged records B-ELC000 and A-TIN000
+        # (dt 0.005 s) in max_steps at every factor, the block at rest on its ringing spring
+        return SpringIntegrator(rtol=1e-10, atol=1e-10, solver="tsit5", max_steps=200_000, autodiff=autodiff or "reverse")
+
+
+class FlexibleSpringModel(AbstractSpringModel):
+    """The SM with a corotational Euler–Bernoulli column (paper sections 5–6). Beyond
+    `AbstractSpringModel`'s fields:
+
+    - `column`: `Column` (E, ρ, optional A, I);
+    - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
+      at the first fixed-base period of the discretised column *with its added rotational masses*
+      (`first_period`; they lengthen it a little, `tests/test_spring.py`);
+    - `n_elements` (static)."""
+
+    block: Block
+    column: Column
+    cbar: Float[Array, ""]
+    smoothing: Float[Array, ""]
+    zeta: Float[Array, ""]
+    threshold: Float[Array, ""]
+    backbone: AbstractBackbone = eqx.field(static=True)
+    added_masses: bool = eqx.field(static=True)
+    n_elements: int = eqx.field(static=True)
+    fixed_base: bool = eqx.field(static=True)
+
+    def __init__(self, block: Block, column: Column, *, added_masses: bool = True, cbar=None,
+                 backbone: AbstractBackbone | str | None = None, smoothing=None, zeta=CONCRETE_ZETA, n_elements: int = 10,
+                 fixed_base: bool = False, threshold=1.0):
+        if not isinstance(column, Column):
+            raise JaxrockInputError(f"column must be a jaxrock Column or None, got {type(column).__name__}")
+        if not isinstance(n_elements, int) or isinstance(n_elements, bool) or n_elements < 1:
+            raise JaxrockInputError(f"n_elements = {n_elements!r}: must be an integer >= 1")
+        self._set_spring(block, True, added_masses, cbar, backbone, smoothing, fixed_base, threshold)
+        self.column = column
+        self.zeta = jnp.asarray(zeta, dtype=float)
+        self.n_elements = n_elements
+        check_limits(self.limits())
+
+    def limits(self) -> tuple[Limit, ...]:
+        return (*self._spring_limits(), Limit("zeta (column damping ratio)", self.zeta, 0.0, math.inf, hi_open=True),
+                *self.column.limits())
+
+    @property
+    def flexible(self) -> bool:
+        return True
+
+    def mass(self):
+        A, _ = self.column.section(self.block)
+        return self.column.rho * A * 2 * self.block.h
+
+    def _default_integrator(self, autodiff):
+        return Checked(GeneralizedAlpha(rtol=1e-5, atol=1e-5, autodiff=autodiff or "forward"))
+
+    def rotational_masses(self):
+        """Rotational inertia at the n + 1 column nodes: ΔI/(n + 1) with the added masses, else the
+        section's rotary inertia ρ I L_trib (keeps M regular; Rayleigh beam)."""
+        blk, n = self.block, self.n_elements
+        if self.added_masses:
+            return jnp.full(n + 1, (self.total_inertia() - (4.0 / 3.0) * self.mass() * blk.h**2) / (n + 1))
+        _, I = self.column.section(blk)
+        le = 2 * blk.h / n
+        return self.column.rho * I * le * jnp.concatenate([jnp.full(1, 0.5), jnp.ones(n - 1), jnp.full(1, 0.5)])
+
+    def first_period(self):
+        """First fixed-base period T₁ [s] of the discretised column with the model's rotational masses
+        (base rotation clamped, no gravity): the period ζ refers to (eq. 21 is the bare solid column's)."""
+        A, I = self.column.section(self.block)
+        E = self.column.E
+        return beam.first_period(self.block.h, self.n_elements, self.mass(), E * A, E * I, self.rotational_masses())
+
+    def rayleigh(self):
+        """Rayleigh coefficients (a₀, a₁) of the column, C = a₀ M + a₁ K on its deformations:
+        stiffness proportional, a₀ = 0 and a₁ = ζ T₁/π (ζ = a₁ ω₁/2 at T₁ = `first_period`)."""
+        return jnp.zeros(()), self.zeta * self.first_period() / jnp.pi
+
+
+def SpringModel(block: Block, column: Column | None = None, *, added_masses: bool = True, cbar=None,
+                backbone: AbstractBackbone | str | None = None, smoothing=None, zeta=None, n_elements: int | None = None,
+                fixed_base: bool = False, threshold=1.0) -> AbstractSpringModel:
+    """The paper's spring model of `block`: quasi-rigid (`QuasiRigidSpringModel`) without a
+    `column`, flexible (`FlexibleSpringModel`, `zeta` default `CONCRETE_ZETA`, `n_elements` 10)
+    with one; the other arguments as `AbstractSpringModel` describes. `zeta` and `n_elements`
+    belong to a column."""
+    if column is None:
+        given = [k for k, v in (("zeta", zeta), ("n_elements", n_elements)) if v is not None]
+        if given:
+            raise JaxrockInputError(f"{', '.join(given)}: the quasi-rigid SM (column=None) has no column; give a Column")
+        return QuasiRigidSpringModel(block, added_masses=added_masses, cbar=cbar, backbone=backbone, smoothing=smoothing,
+                                     fixed_base=fixed_base, threshold=threshold)
+    return FlexibleSpringModel(block, column, added_masses=added_masses, cbar=cbar, backbone=backbone, smoothing=smoothing,
+                               zeta=CONCRETE_ZETA if zeta is None else zeta, n_elements=10 if n_elements is None else n_elements,
+                               fixed_base=fixed_base, threshold=threshold)
+
+
 @eqx.filter_jit
 def _pushover(system: SpringSystem, theta):
     """`SpringModel.pushover` on the assembled system (compiled once per column structure)."""
@@ -286,15 +360,15 @@ def _pushover(system: SpringSystem, theta):
     return jnp.vectorize(one)(theta)
 
 
-def quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -> SpringModel:
+def quasi_rigid_scene(block: Block, cbar=None, backbone=None, smoothing=None) -> QuasiRigidSpringModel:
     """A scenes file's quasi-rigid spring model (added masses; default damper, backbone, smoothing):
     the builder of the model kind "spring" (`jaxrock.scene.MODEL_KINDS`)."""
-    return SpringModel(block, None, cbar=cbar, backbone=backbone, smoothing=smoothing)
+    return QuasiRigidSpringModel(block, cbar=cbar, backbone=backbone, smoothing=smoothing)
 
 
-def flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None) -> SpringModel:
+def flexible_scene(block: Block, cbar=None, E=None, rho=None, zeta=None, backbone=None, smoothing=None) -> FlexibleSpringModel:
     """A scenes file's flexible spring model, a concrete column unless E, ρ, ζ are given: the
     builder of the model kind "spring-flexible" (`jaxrock.scene.MODEL_KINDS`)."""
     column = Column(CONCRETE_E if E is None else E, CONCRETE_RHO if rho is None else rho)
-    return SpringModel(block, column, zeta=CONCRETE_ZETA if zeta is None else zeta, cbar=cbar,
-                       backbone=backbone, smoothing=smoothing)
+    return FlexibleSpringModel(block, column, zeta=CONCRETE_ZETA if zeta is None else zeta, cbar=cbar,
+                               backbone=backbone, smoothing=smoothing)

@@ -530,7 +530,7 @@ def assemble(model, track_energy: bool = False) -> AbstractSpringSystem:
         R_r=blk.R_r,
         Itot=Itot,
     )
-    if model.column is None:
+    if not model.flexible:
         return QuasiRigidSystem(**common)
     n = model.n_elements
     A, I = model.column.section(blk)
