@@ -36,11 +36,12 @@ _EXPORTS = {
     **dict.fromkeys(["SUMMARY", "Output"], "outputs"),
     **dict.fromkeys(["AbstractIntegrator", "AbstractModel", "AbstractStepper", "AbstractSpringIntegrator", "Schedule", "simulate"],
                     "model"),
-    **dict.fromkeys(["ModelKind", "Param", "register_model_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"], "scene"),
+    **dict.fromkeys(["ModelKind", "Param", "register_model_kind", "register_pulse_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"], "scene"),
+    **dict.fromkeys(["scene_of", "scene_model", "scene_pulse"], "construct"),
     **dict.fromkeys(["Sensitivity", "verdict_uncertain"], "sensitivity"),
     **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
-    **dict.fromkeys(["SpringModel", "AbstractSpringModel", "QuasiRigidSpringModel", "FlexibleSpringModel", "SpringSystem", "Column", "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear",
-                     "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
+    **dict.fromkeys(["SpringModel", "AbstractSpringModel", "QuasiRigidSpringModel", "FlexibleSpringModel", "SpringSystem", "Column",
+                     "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear", "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
     **dict.fromkeys(["el_centro", "builtin_record", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",
     **dict.fromkeys(["record_measures", "suite_measures"], "intensity"),
@@ -71,8 +72,9 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
     )
     from .scene import (
         ModelKind as ModelKind, Param as Param, register_model_kind as register_model_kind,
-        DEFAULT_SMOOTHING as DEFAULT_SMOOTHING, DEFAULT_BACKBONE as DEFAULT_BACKBONE,
+        register_pulse_kind as register_pulse_kind, DEFAULT_SMOOTHING as DEFAULT_SMOOTHING, DEFAULT_BACKBONE as DEFAULT_BACKBONE,
     )
+    from .construct import scene_of as scene_of, scene_model as scene_model, scene_pulse as scene_pulse
     from .sensitivity import Sensitivity as Sensitivity, verdict_uncertain as verdict_uncertain
     from .rigid import EventIntegrator as EventIntegrator, RigidModel as RigidModel
     from .spring import (

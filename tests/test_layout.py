@@ -14,7 +14,7 @@ LAYERS = [
     ("front ends", ("cli", "paper", "numerics", "reports", "plotting")),
     ("analyses", ("analyses",)),
     ("input/output", ("io",)),
-    ("models", ("rigid", "spring")),
+    ("models", ("rigid", "spring", "construct")),
     ("protocol", ("model", "bookkeeping", "sensitivity")),
     ("values", ("geometry", "excitation", "results", "intensity")),
     ("vocabulary", ("scene", "outputs")),  # words and defaults, without JAX

@@ -325,3 +325,50 @@ def test_a_sweep_of_a_trillion_chunks_starts_resumes_and_stops_at_once(tmp_path)
             run_sweep(sw, path, progress=False)
     assert zstore.flagged(path, sw) == {0, 7}
     assert time.perf_counter() - t0 < 20
+
+
+@pytest.mark.parametrize("kind, pulse", [("rigid", "sine"), ("spring", "antisymmetric"), ("spring-flexible", "symmetric")])
+def test_scene_of_builds_under_vmap_what_each_route_builds(kind, pulse):
+    """`jaxrock.scene_of`, the one constructor of (model, pulse) from flat values, vmapped over
+    seeded scenes: each lane is, leaf for leaf, the model and pulse built one at a time from the
+    kind's builder and the pulse's class, and a sweep's chunk (which builds with it) holds the
+    same scenes; each lane runs to `simulate`'s result on its own scene."""
+    import jax
+    import jax.numpy as jnp
+
+    rng = np.random.default_rng(5700)
+    n = 4
+    values = {"height": rng.uniform(2, 30, n), "tan_alpha": rng.uniform(0.1, 0.3, n), "accel_ratio": rng.uniform(1, 5, n),
+              "omega_ratio": rng.uniform(1, 8, n)}
+    if kind == "rigid":
+        values["eta"] = rng.uniform(0.7, 1.0, n)
+    else:
+        values["cbar"] = rng.uniform(0.0, 0.2, n)
+    if pulse == "sine":
+        values["n_cycles"] = rng.integers(1, 6, n) / 2
+    models, pulses = jax.vmap(lambda v: jr.scene_of(kind, pulse, v))({k: jnp.asarray(v) for k, v in values.items()})
+    for i in range(n):
+        one = {k: float(v[i]) for k, v in values.items()}
+        block = jr.Block.from_slenderness(one["height"], one["tan_alpha"])
+        params = {k: one[k] for k in ("eta", "cbar") if k in one}
+        model = jr.scene.MODEL_KINDS[kind].model(block, **params)
+        a_p, w_p = jr.pulse_of_ratios(block, one["accel_ratio"], one["omega_ratio"])
+        exc = jr.scene.pulse_class(pulse)(a_p, w_p, **({"n_cycles": one["n_cycles"]} if pulse == "sine" else {}))
+        for got, want in ((models, model), (pulses, exc)):
+            lane = jax.tree_util.tree_map(lambda x: x[i], got)
+            assert jax.tree_util.tree_structure(lane) == jax.tree_util.tree_structure(want)
+            for x, y in zip(jax.tree_util.tree_leaves(lane), jax.tree_util.tree_leaves(want)):
+                np.testing.assert_allclose(np.asarray(x), np.asarray(y), rtol=1e-15, atol=0)
+    if kind == "rigid":
+        sol = jr.run_batch(models, pulses, model_batched=True)
+        for i in range(n):
+            lane = jax.tree_util.tree_map(lambda x: x[i], (models, pulses))
+            assert abs(float(sol.max_theta[i]) - float(jr.simulate(*lane).max_theta)) <= 1e-9
+    sw = Sweep.make(kind, pulse=pulse, height=values["height"][0], tan_alpha=values["tan_alpha"][0],
+                    accel_ratio=values["accel_ratio"], omega_ratio=values["omega_ratio"][0],
+                    **({"n_cycles": values["n_cycles"][0]} if pulse == "sine" else {}))
+    v = sw.chunk_values(0)
+    built = sw._excitations(v, sw._models(v, batched=True), batched=True)
+    same = jax.vmap(lambda vv: jr.scene_of(kind, pulse, vv)[1])({k: jnp.asarray(x) for k, x in v.items()})
+    for x, y in zip(jax.tree_util.tree_leaves(built), jax.tree_util.tree_leaves(same)):
+        np.testing.assert_array_equal(np.asarray(x), np.asarray(y))

@@ -25,7 +25,7 @@ from ..io import provenance
 from ..io.files import write_output
 from ..model import AbstractIntegrator, AbstractModel
 from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module
-from ..geometry import pulse_of_ratios
+from ..construct import scene_pulse
 from ..scene import AXES, DEFAULT_PULSE, pulse_class
 from ..sensitivity import forward_integrator
 from .engine import batch_limit, even_batches, make_stepper, run_batch
@@ -253,7 +253,8 @@ def refine_boundaries(
             for _ in range(int(iterations)):
                 interrupt.stop_point()
                 mid = np.where(todo, 0.5 * (lo + hi), ar[0])
-                exc = jax.vmap(lambda a, w: cls(a, w, **pp))(*(jnp.asarray(x) for x in pulse_of_ratios(model.block, mid, wr)))
+                exc = jax.vmap(lambda a, w: scene_pulse(cls, model.block, {"accel_ratio": a, "omega_ratio": w, **pp}))(
+                    jnp.asarray(mid), jnp.asarray(wr))
                 yes = np.asarray(getattr(run_batch(model, exc, integrator), flag))
                 hi = np.where(todo & yes, mid, hi)
                 lo = np.where(todo & ~yes, mid, lo)

@@ -32,8 +32,8 @@ import numpy as np
 
 from .._validate import JaxrockInputError, check_range
 from ..outputs import OUTPUTS
-from ..scene import (DEFAULT_PULSE, MODEL_KINDS, PULSE_PARAMS, PULSES, model_kinds, model_params, pulse_class, pulse_params, pulse_takes,
-                     sweep_quantities, takes)
+from ..scene import (DEFAULT_PULSE, MODEL_KINDS, PULSES, model_kinds, model_params, pulse_class, pulse_params, pulse_takes, sweep_quantities,
+                     takes)
 from .engine import batch_limit, make_stepper, on_devices, run_batch
 
 
@@ -49,14 +49,6 @@ def model_quantities() -> tuple[str, ...]:
 
 
 PULSE_QUANTITIES = ("accel_ratio", "omega_ratio")
-
-
-def _pulse_params(pulse) -> dict:
-    """The parameters beyond a_p and ω_p (`jaxrock.scene.PULSE_PARAMS`) of a pulse kind, named or
-    given as its class or callable (a class registered under no name: none)."""
-    if isinstance(pulse, str):
-        return PULSE_PARAMS.get(pulse, {})
-    return next((PULSE_PARAMS.get(k, {}) for k, v in PULSES.items() if v is pulse or (isinstance(v, str) and pulse_class(k) is pulse)), {})
 DEFAULTS = {"height": 10.0, "tan_alpha": 0.2}  # the rest: the model kind's own defaults
 
 
@@ -118,7 +110,9 @@ class Sweep:
         if backbone is not None and isinstance(model, str) and "backbone" not in MODEL_KINDS[model].parameters:
             raise JaxrockInputError(f"backbone applies to the spring models only, not {model}")
         recs = () if records is None else (tuple(records) if isinstance(records, (list, tuple)) else (records,))
-        own_pulse = _pulse_params(DEFAULT_PULSE if pulse is None else pulse)
+        from ..construct import pulse_params_of
+
+        own_pulse = pulse_params_of(DEFAULT_PULSE if pulse is None else pulse)
         for name in (q for q in given if q in pulse_params()):
             if recs or name not in own_pulse:
                 kinds = f"pulse {' / '.join(pulse_takes(name))}"
@@ -301,7 +295,9 @@ class Sweep:
 
     # -- models and excitations -------------------------------------------------------------------
     def _model_kwargs(self, v: dict, i=slice(None)) -> dict:
-        kw = {k: v[k][i] for k in MODEL_KINDS[self.model].parameters if k in v}
+        from ..construct import kind_values
+
+        kw = {k: x[i] for k, x in kind_values(self.model, v).items()}
         if self.backbone is not None:
             kw["backbone"] = self.backbone
         return kw
@@ -323,9 +319,8 @@ class Sweep:
         import jax
         import jax.numpy as jnp
 
+        from ..construct import scene_model
         from ..geometry import Block
-        from ..io.scenes_file import scene_model
-
         if not isinstance(self.model, str):
             if "height" not in v:
                 return self.model
@@ -344,14 +339,14 @@ class Sweep:
         import jax
         import jax.numpy as jnp
 
-        from ..geometry import pulse_of_ratios
+        from ..construct import pulse_values, scene_pulse
+
         if self.pulse is not None:
+            values = {k: jnp.asarray(x) for k, x in {**pulse_values(self.pulse, v), "accel_ratio": v["accel_ratio"],
+                                                     "omega_ratio": v["omega_ratio"]}.items()}
             if batched:
-                a_p, w_p = jax.vmap(pulse_of_ratios)(model.block, jnp.asarray(v["accel_ratio"]), jnp.asarray(v["omega_ratio"]))
-            else:
-                a_p, w_p = pulse_of_ratios(model.block, v["accel_ratio"], v["omega_ratio"])
-            kw = {k: jnp.asarray(v[k]) for k in _pulse_params(self.pulse) if k in v}
-            return jax.vmap(lambda a, w, kw: pulse_class(self.pulse)(a, w, **kw))(jnp.asarray(a_p), jnp.asarray(w_p), kw)
+                return jax.vmap(lambda b, vv: scene_pulse(self.pulse, b, vv))(model.block, values)
+            return jax.vmap(lambda vv: scene_pulse(self.pulse, model.block, vv))(values)
         import equinox as eqx
 
         from ..io.scenes_file import stack

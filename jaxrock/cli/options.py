@@ -160,8 +160,8 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
             given[name] = UNDAMPED[name]
     if "backbone" in given:
         given["backbone"] = BackboneKind(given["backbone"]).value
+    from ..construct import scene_model
     from ..geometry import Block
-    from ..io.scenes_file import scene_model
 
     return scene_model(kind, Block.from_slenderness(height, tan_alpha, tan_alpha_base), **given)
 
@@ -251,8 +251,9 @@ def check_pulse_params(pulse: str, given: dict, record: bool = False) -> None:
 def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, accel_ratio, omega_p, omega_ratio, units=None,
                 pulse_params: dict | None = None):
     from .._validate import JaxrockInputError, check_range
+    from ..construct import scene_pulse
     from ..geometry import pulse_of_ratios, ratios_of_pulse
-    from ..scene import is_builtin_record, pulse_class
+    from ..scene import is_builtin_record
 
     pulse_params = pulse_params or {}
     check_pulse_params(pulse, pulse_params, record is not None)
@@ -291,7 +292,7 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
         else:
             check_range("--omega-ratio", omega_ratio, 0.0, math.inf, lo_open=True, hi_open=True)
             omega_p = float(pulse_of_ratios(block, 1.0, omega_ratio)[1])
-    exc = pulse_class(pulse)(a_p, omega_p, **pulse_params)
+    exc = scene_pulse(pulse, block, {"a_p": a_p, "omega_p": omega_p, **pulse_params})
     a_r, w_r = (float(x) for x in ratios_of_pulse(block, a_p, omega_p))
     extra = "".join(f", {k} = {v:g}" for k, v in pulse_params.items())
     desc = f"{pulse} pulse a_p = {a_p:.4g} m/s² ({a_r:.4g} g tanα), ω_p = {omega_p:.4g} rad/s ({w_r:.4g} p){extra}"

@@ -56,10 +56,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._validate import JaxrockInputError, check_range, in_range, is_number, within_limits
+from ..construct import kind_values, pulse_params_of, scene_model, scene_pulse
 from ..excitation import Record
 from ..geometry import G, Block, pulse_of_ratios
 from ..scene import (DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, PULSE_PARAMS, PULSES, RECORD_ALIASES, TAN_ALPHA_MIN, builtin_record_names,
-                     is_builtin_record, model_kinds, model_params, parameter_table, parameters, pulse_class, pulse_params,
+                     is_builtin_record, model_kinds, model_params, parameter_table, parameters, pulse_params,
                      pulse_takes, takes)
 from ..results import RESULT_COLUMNS, summary_doc
 from .tables import csv_text
@@ -163,23 +164,6 @@ def _resolve_record(text: str, base: Path, fail, cache: dict) -> Record:
     return cache[path]
 
 
-def scene_model(kind: str, block: Block, **parameters):
-    """The model of one scene of model kind `kind` (`model_kinds()`), built by its registered builder
-    (`jaxrock.scene.ModelKind`) from `block` and the given `parameters` (None: the default):
-    shared by the batch rows and the CLI. Refuses a parameter the kind does not take."""
-    if kind not in MODEL_KINDS:
-        raise JaxrockInputError(f"model = {kind!r}; valid: {', '.join(model_kinds())}")
-    entry = MODEL_KINDS[kind]
-    given = {k: v for k, v in parameters.items() if v is not None}
-    extra = sorted(set(given) - set(entry.parameters))
-    if extra:
-        raise JaxrockInputError(f"{', '.join(extra)}: not a parameter of model {kind} (it takes {', '.join(entry.parameters) or 'none'})")
-    for name, p in entry.params.items():  # against the kind's own declaration (concrete values; a vmapped row is checked before)
-        if name in given:
-            check_range(name, given[name], p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open)
-    return entry.model(block, **given)
-
-
 def _invalid_lanes(stacked) -> np.ndarray:
     """Per lane of a stacked value (a `Block`, a `Column`): whether a parameter is outside its limits."""
     return ~np.asarray(jax.vmap(lambda one: within_limits(one.limits()))(stacked))
@@ -212,8 +196,7 @@ class Scenes:
         """The stacked models of rows `idx` (all of model kind `kind`)."""
         p = {k: jnp.asarray(v[idx]) for k, v in self.params.items()}
         block = jax.vmap(Block.from_slenderness)(p["height"], p["tan_alpha"], p["tan_alpha_base"])
-        takes = {k: p[k] for k in MODEL_KINDS[kind].parameters if k in model_params()}
-        return jax.vmap(lambda b, kw: scene_model(kind, b, **kw))(block, takes)
+        return jax.vmap(lambda b, kw: scene_model(kind, b, **kw))(block, kind_values(kind, p))
 
     def intensity(self, idx) -> np.ndarray:
         """Per row of `idx`: its excitation's peak |üg| over the block's uplift level g tanα′
@@ -235,9 +218,8 @@ class Scenes:
     def excitation(self, exc: str, idx) -> object:
         """The stacked excitations of rows `idx` (all of excitation kind `exc`)."""
         if exc in PULSES:
-            kw = {k: jnp.asarray(self.params[k][idx]) for k in PULSE_PARAMS.get(exc, {})}
-            return jax.vmap(lambda a, w, kw: pulse_class(exc)(a, w, **kw))(jnp.asarray(self.params["a_p"][idx]),
-                                                                           jnp.asarray(self.params["omega_p"][idx]), kw)
+            values = {k: jnp.asarray(self.params[k][idx]) for k in ("a_p", "omega_p", *pulse_params_of(exc))}
+            return jax.vmap(lambda v: scene_pulse(exc, None, v))(values)
         n = max(self.records[i].n for i in idx)  # records of distinct lengths, padded to one: one program
         return stack([self.records[i].padded(n, "record").scaled(self.params["scale"][i]) for i in idx])
 
