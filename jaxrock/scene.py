@@ -386,19 +386,25 @@ def parameter_help(name: str, valid: bool = True) -> str:
 
 
 # -- sweeps ----------------------------------------------------------------------------------------
-def sweep_quantities() -> dict[str, tuple]:
+def sweep_quantities(kind: str | None = None, pulse: str | None = None) -> dict[str, tuple]:
     """What a sweep can vary, in its store's dimension order (outermost first): quantity → (long
     name, units, valid range (lo, hi, lo_open, hi_open); None for the record names). The model
-    parameters are the registered kinds' (`model_params`), a kind registered since included."""
+    parameters are the registered kinds' (`model_params`), a kind registered since included; a
+    parameter that model kind `kind` (pulse kind `pulse`) declares is its own declaration's (a name
+    two kinds share, e.g. `zeta`, has each kind's meaning and range)."""
+    own = {**MODEL_KINDS[kind].params} if kind in MODEL_KINDS else {}
+    own.update(PULSE_PARAMS.get(pulse, {}) if isinstance(pulse, str) else {})
+    params = {**model_params(), **pulse_params()}
+    described = {name: (p.long_name or p.meaning, p.units, p.range) for name, p in {**params, **own}.items() if name in params}
     return {
         "record": ("ground-motion record", "", None),
         "height": ("full height 2h", "m", (0.0, math.inf, True, True)),
         "tan_alpha": ("slenderness tan(alpha) = b/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
         "tan_alpha_base": ("extended base slenderness tan(alpha') = b'/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
-        **{p.name: (p.long_name or p.meaning, p.units, p.range) for p in model_params().values()},
+        **{name: described[name] for name in model_params()},
         "smoothing": ("spring pre-yield rotation theta_s/alpha'", "1", (0.0, 1.0, True, True)),
         "scale": ("record scale factor", "1", (0.0, math.inf, False, True)),
-        **{p.name: (p.long_name or p.meaning, p.units, p.range) for p in pulse_params().values()},
+        **{name: described[name] for name in pulse_params()},
         "accel_ratio": ("a_p/(g tan alpha')", "1", (0.0, math.inf, True, True)),
         "omega_ratio": ("omega_p/p'", "1", (0.0, math.inf, True, True)),
     }

@@ -252,6 +252,9 @@ def test_a_sweep_varies_the_newcomers_own_parameter(oscillator_kind):
         sol = jr.simulate(Oscillator(BLOCK, zeta=jnp.asarray(z)), jr.RickerPulse(0.6 * float(BLOCK.uplift_acceleration), float(BLOCK.p_r)))
         assert abs(value - float(sol.max_theta)) <= 1e-12
     assert got[1] < got[0]
+    from jaxrock.io.store import _coordinates
+
+    assert _coordinates(sw)["zeta"][2]["long_name"] == "oscillator damping ratio"  # its store names its own zeta
     with pytest.raises(jr.JaxrockInputError, match=r"zeta.*\[0, 2\]"):
         Sweep.make("oscillator", zeta=[0.1, 3.0], accel_ratio=0.6, omega_ratio=1.0)
     with pytest.raises(jr.JaxrockInputError, match="zeta applies to model spring-flexible / oscillator only, not rigid"):
@@ -328,6 +331,7 @@ def test_a_plugin_kind_and_its_own_parameter_reach_every_entry_point(oscillator_
     import xarray as xr
 
     ds = xr.open_zarr(tmp / "s.zarr")
+    assert ds.threshold.attrs["long_name"] == "amplitude θ/α′ counted as overturning"
     for th in (0.2, 0.5):
         for a in (0.1, 0.4):
             got = float(ds.max_theta.sel(threshold=th, accel_ratio=a).squeeze())
@@ -351,6 +355,8 @@ def test_a_plugin_kind_and_its_own_parameter_reach_every_entry_point(oscillator_
     # refused in one line, exit 2: its flag on another kind, its own range, a plugin that is not there
     for args, plugins, says in ((("simulate", "--threshold", "0.5"), "oscillator_plugin", "--threshold applies to --model oscillator only, not rigid"),
                                 (("simulate", "--model", "oscillator", "--threshold", "0"), "oscillator_plugin", r"threshold = 0 .*\(0, 10\]"),
+                                (("sweep", "--model", "oscillator", "--zeta", "3", "--accel-ratio", "1", "--omega-ratio", "1", "--store", "z.zarr"),
+                                 "oscillator_plugin", r"zeta = 3 .*\[0, 2\]"),
                                 (("simulate", "--help"), "no_such_plugin", "JAXROCK_PLUGINS module 'no_such_plugin' could not be loaded")):
         r = _jaxrock(tmp, *args, plugins=plugins)
         assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and re.search(says, r.stderr), r.stderr

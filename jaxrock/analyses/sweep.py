@@ -26,7 +26,7 @@ import os
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
-from typing import Callable, Iterable
+from typing import TYPE_CHECKING, Callable, Iterable
 
 import numpy as np
 
@@ -35,6 +35,9 @@ from ..outputs import OUTPUTS
 from ..scene import (DEFAULT_PULSE, MODEL_KINDS, PULSES, model_kinds, model_params, pulse_class, pulse_params, pulse_takes, sweep_quantities,
                      takes)
 from .engine import batch_limit, make_stepper, on_devices, run_batch
+
+if TYPE_CHECKING:
+    from ..model import AbstractModel
 
 
 def axis_order() -> tuple[str, ...]:
@@ -68,10 +71,10 @@ class Sweep:
       default); else those outputs read "not computed".
     """
 
-    model: str
+    model: "str | AbstractModel"
     axes: dict
     fixed: dict
-    pulse: str | None
+    pulse: "str | Callable | None"
     records: tuple = ()
     backbone: str | None = None
     integrator: object = None
@@ -134,6 +137,7 @@ class Sweep:
                 raise JaxrockInputError(f"pulse = {pulse!r}; valid: {', '.join(PULSES)}")
         values = {**(DEFAULTS if isinstance(model, str) else {}), **given}
         axes, fixed = {}, {}
+        known = sweep_quantities(model if isinstance(model, str) else None, pulse if isinstance(pulse, str) else None)  # each kind's own
         for name in known:
             if name == "record":
                 if recs:
@@ -142,14 +146,12 @@ class Sweep:
             if name not in values:
                 continue
             v = np.asarray(values[name], dtype=float)
-            own = MODEL_KINDS[model].params.get(name) if isinstance(model, str) else None  # the kind's own declaration
-            own = own_pulse.get(name, own)
-            lo, hi, lo_open, hi_open = own.range if own is not None else known[name][2]
             if v.ndim > 1 or v.size == 0:
                 raise JaxrockInputError(f"{name}: one number or a 1-D sequence of numbers, got shape {v.shape}")
+            lo, hi, lo_open, hi_open = known[name][2]
             check_range(name, v, lo, hi, lo_open=lo_open, hi_open=hi_open)
-            if own is not None:
-                own.check_step(v, name)
+            if name in own_pulse:
+                own_pulse[name].check_step(v, name)
             (axes if v.ndim == 1 else fixed)[name] = v if v.ndim == 1 else float(v)
         ta = axes.get("tan_alpha", fixed.get("tan_alpha"))
         tb = axes.get("tan_alpha_base", fixed.get("tan_alpha_base"))

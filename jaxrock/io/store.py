@@ -55,7 +55,7 @@ def _variables() -> dict[str, tuple[np.dtype, object, dict]]:
 def _coordinates(sweep) -> dict:
     from ..scene import sweep_quantities
 
-    known = sweep_quantities()
+    known = sweep_quantities(sweep.model if isinstance(sweep.model, str) else None, sweep.pulse if isinstance(sweep.pulse, str) else None)
     coords = {}
     for name, values in sweep.axes.items():
         long_name, units, _ = known[name]
