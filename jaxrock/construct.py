@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Mapping
 
-from ._validate import JaxrockInputError, check_range
+from ._validate import JaxrockInputError
 from .geometry import Block, pulse_of_ratios
 from .scene import MODEL_KINDS, PULSE_PARAMS, PULSES, model_kinds, pulse_class
 
@@ -37,7 +37,7 @@ def scene_model(kind: str, block: Block, **parameters):
         raise JaxrockInputError(f"{', '.join(extra)}: not a parameter of model {kind} (it takes {', '.join(entry.parameters) or 'none'})")
     for name, p in entry.params.items():  # against the kind's own declaration (concrete values; a vmapped row is checked before)
         if name in given:
-            check_range(name, given[name], p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open)
+            p.check(given[name])
     return entry.model(block, **given)
 
 

@@ -30,7 +30,7 @@ import importlib
 import math
 from typing import Callable, NamedTuple
 
-from ._validate import JaxrockInputError, check_range
+from ._validate import JaxrockInputError, check_range, is_concrete
 
 
 def _resolve(module: str, name: str):
@@ -73,6 +73,13 @@ class Param(NamedTuple):
         else:
             text = f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}{')' if self.hi_open else ']'}"
         return text if self.step is None else f"multiples of {self.step:g} in {text}"
+
+    def check(self, x, name: str | None = None) -> None:
+        """Refuse, in one line naming `name` (default the parameter's), a value outside the valid
+        range or off its step (concrete values; a traced one is checked where it is made)."""
+        check_range(name or self.name, x, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open)
+        if is_concrete(x):
+            self.check_step(x, name)
 
     def off_step(self, x):
         """Where the values `x` (an array) are not whole multiples of `step` (none without one)."""
@@ -282,13 +289,26 @@ MAX_REFINE = 40  # bisections of a boundary or a least scale: the step / 2^40 is
 MAX_ENSEMBLE = 1024  # perturbed runs per uncertain verdict (`jaxrock.analyses.suite.overturning_probability`)
 
 
+# the scene's quantities beyond the model kinds' and pulse kinds' own (sweep axes, scenes-file columns)
+HEIGHT = Param("height", "full height 2h of the column", "m", 0.0, math.inf, True, True, long_name="full height 2h", units="m")
+TAN_ALPHA = Param("tan_alpha", "slenderness tanα = b/h", "–", TAN_ALPHA_MIN, 1.0, hi_open=True,
+                  long_name="slenderness tan(alpha) = b/h")
+TAN_ALPHA_BASE = Param("tan_alpha_base", "extended rigid base tanα′ = b′/h (paper section 5)", "–", TAN_ALPHA_MIN, 1.0, hi_open=True,
+                       long_name="extended base slenderness tan(alpha') = b'/h")
+SMOOTHING = Param("smoothing", "spring pre-yield rotation θs/α′", "–", 0.0, 1.0, True, True,
+                  long_name="spring pre-yield rotation theta_s/alpha'")
+SCALE = Param("scale", "factor on a record", "–", 0.0, math.inf, hi_open=True, default=1.0, long_name="record scale factor")
+ACCEL_RATIO = Param("accel_ratio", "a_p/(g tanα′)", "–", 0.0, math.inf, True, True, long_name="a_p/(g tan alpha')")
+OMEGA_RATIO = Param("omega_ratio", "ω_p/p′", "–", 0.0, math.inf, True, True, long_name="omega_p/p'")
+
+
 def check_slenderness(height, tan_alpha, tan_alpha_base=None) -> None:
     """Refuse, in one line, a block's full height 2h outside `HEIGHT_RANGE` or a slenderness tanα
     (and the base's tanα′) outside [TAN_ALPHA_MIN, 1) (`jaxrock.Block.from_slenderness`'s checks)."""
     check_range("height (2h) [m]", height, *HEIGHT_RANGE)
-    check_range("tan_alpha", tan_alpha, TAN_ALPHA_MIN, 1.0, hi_open=True)
+    TAN_ALPHA.check(tan_alpha)
     if tan_alpha_base is not None:
-        check_range("tan_alpha_base", tan_alpha_base, TAN_ALPHA_MIN, 1.0, hi_open=True)
+        TAN_ALPHA_BASE.check(tan_alpha_base)
 
 
 # -- spring backbones ------------------------------------------------------------------------------
@@ -396,15 +416,12 @@ def sweep_quantities(kind: str | None = None, pulse: str | None = None) -> dict[
     own.update(PULSE_PARAMS.get(pulse, {}) if isinstance(pulse, str) else {})
     params = {**model_params(), **pulse_params()}
     described = {name: (p.long_name or p.meaning, p.units, p.range) for name, p in {**params, **own}.items() if name in params}
+    scene = lambda *ps: {p.name: (p.long_name or p.meaning, p.units, p.range) for p in ps}
     return {
         "record": ("ground-motion record", "", None),
-        "height": ("full height 2h", "m", (0.0, math.inf, True, True)),
-        "tan_alpha": ("slenderness tan(alpha) = b/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
-        "tan_alpha_base": ("extended base slenderness tan(alpha') = b'/h", "1", (TAN_ALPHA_MIN, 1.0, False, True)),
+        **scene(HEIGHT, TAN_ALPHA, TAN_ALPHA_BASE),
         **{name: described[name] for name in model_params()},
-        "smoothing": ("spring pre-yield rotation theta_s/alpha'", "1", (0.0, 1.0, True, True)),
-        "scale": ("record scale factor", "1", (0.0, math.inf, False, True)),
+        **scene(SMOOTHING, SCALE),
         **{name: described[name] for name in pulse_params()},
-        "accel_ratio": ("a_p/(g tan alpha')", "1", (0.0, math.inf, True, True)),
-        "omega_ratio": ("omega_p/p'", "1", (0.0, math.inf, True, True)),
+        **scene(ACCEL_RATIO, OMEGA_RATIO),
     }

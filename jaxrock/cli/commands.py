@@ -19,7 +19,7 @@ from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untru
                      SENSITIVITY_COST, cell_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import (BUILTIN_SUITE, DEFAULT_BACKBONE, DEFAULT_MODEL, DEFAULT_PULSE, DEFAULT_SMOOTHING, MAX_ENSEMBLE, MAX_REFINE, PULSES,
-                     RECORD_ALIASES, TAN_ALPHA_MIN, UNDAMPED, builtin_record_names, model_kinds, model_params, parameter_help,
+                     RECORD_ALIASES, TAN_ALPHA, UNDAMPED, builtin_record_names, model_kinds, model_params, parameter_help,
                      pulse_params)
 from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _axis, _check_count, _check_refine, _excitation,
                       _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary, SENSITIVITY_HELP,
@@ -594,7 +594,7 @@ def calibrate(
 ):
     """Calibrate the spring model's damper c̄ against the rigid model's η⁴ (paper eq. 17, figure 7)."""
     # Thin wrapper over jaxrock.reports.calibration_report.
-    from .._validate import JaxrockInputError, check_range, check_writable
+    from .._validate import JaxrockInputError, check_writable
 
     _check_count("--max-iter", max_iter)
     check_writable("--out", out / "calibration.csv")
@@ -602,7 +602,7 @@ def calibrate(
     ta = None
     if tan_alphas is not None:
         ta = parse_values("--tan-alphas", tan_alphas)
-        check_range("--tan-alphas", ta, TAN_ALPHA_MIN, 1.0, hi_open=True)
+        TAN_ALPHA.check(ta, "--tan-alphas")
         if np.unique(ta).size < 3:
             raise JaxrockInputError(f"--tan-alphas = {tan_alphas!r}: {np.unique(ta).size} distinct value(s); "
                                     "the power-law fit c̄ = k (α/0.1)^n needs at least 3")

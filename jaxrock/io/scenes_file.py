@@ -59,7 +59,8 @@ from .._validate import JaxrockInputError, check_range, in_range, is_number, wit
 from ..construct import kind_values, pulse_params_of, scene_model, scene_pulse
 from ..excitation import Record
 from ..geometry import G, Block, pulse_of_ratios
-from ..scene import (DEFAULT_MODEL, DEFAULT_PULSE, MODEL_KINDS, PULSE_PARAMS, PULSES, RECORD_ALIASES, TAN_ALPHA_MIN, builtin_record_names,
+from ..scene import (DEFAULT_MODEL, DEFAULT_PULSE, HEIGHT, MODEL_KINDS, PULSE_PARAMS, PULSES, RECORD_ALIASES, SCALE, TAN_ALPHA, TAN_ALPHA_BASE,
+                     TAN_ALPHA_MIN, builtin_record_names,
                      is_builtin_record, model_kinds, model_params, parameter_table, parameters, pulse_params,
                      pulse_takes, takes)
 from ..results import RESULT_COLUMNS, summary_doc
@@ -105,6 +106,12 @@ class _Table:
 
     def text(self, col: str, default: str) -> np.ndarray:
         return np.where(self.has(col), self.cells.get(col, default), default)
+
+    def param(self, p, rows=None) -> np.ndarray:
+        """The column of a declared parameter (`jaxrock.scene.Param`), checked against its range and step."""
+        x = self.num(p.name.lower(), p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open, rows=rows)
+        self.fail(p.off_step(x), p.name.lower(), lambda i: f"{x[i]:g}; valid: {p.range_text}")
+        return x
 
     def num(self, col: str, lo=-math.inf, hi=math.inf, *, lo_open=False, hi_open=False, nonzero=False, rows=None) -> np.ndarray:
         """The column's numbers (NaN where empty, or outside `rows`), each checked against the range."""
@@ -232,16 +239,16 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
         col, kinds = name.lower(), takes(name)
         t.fail(t.has(col) & ~np.isin(kind, kinds), col, lambda i: f"applies only to model {' / '.join(kinds)}, not {kind[i]}")
 
-    height = t.num("height", 0.0, math.inf, lo_open=True, hi_open=True)
+    height = t.param(HEIGHT)
     t.fail(np.isnan(height), "height", "missing: the full height 2h [m] (> 0) is required")
     by_tan = t.one_of("tan_alpha", "width", "slenderness tanα = b/h in [1e-3, 1), or full width 2b [m]", everyone)
-    tan_a = t.num("tan_alpha", TAN_ALPHA_MIN, 1.0, hi_open=True)
+    tan_a = t.param(TAN_ALPHA)
     width = t.num("width", 0.0, math.inf, lo_open=True, hi_open=True)
     tan_a = np.where(by_tan, tan_a, width / height)
     t.fail(~by_tan & ~(tan_a < 1), "width", lambda i: f"width/height = {tan_a[i]:g}; valid: width < height (tanα < 1)")
     t.fail(~by_tan & ~(tan_a >= TAN_ALPHA_MIN), "width",
            lambda i: f"width/height = {tan_a[i]:g}; valid: tanα >= {TAN_ALPHA_MIN:g}")
-    tan_b = t.num("tan_alpha_base", TAN_ALPHA_MIN, 1.0, hi_open=True)
+    tan_b = t.param(TAN_ALPHA_BASE)
     t.fail(tan_b < tan_a * (1 - 1e-12), "tan_alpha_base",
            lambda i: f"tan_alpha_base = {tan_b[i]:g} < tan_alpha = {tan_a[i]:g}; valid: [tan_alpha, 1)")
     tan_b = np.where(np.isnan(tan_b), tan_a, tan_b)  # no base: b′ = b
@@ -259,7 +266,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
         for k in takes(name):
             rows = kind == k
             p = MODEL_KINDS[k].params.get(name, shared)
-            x = t.num(name.lower(), p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open, rows=rows)
+            x = t.param(p, rows=rows)
             default = p.default if p.default is not None else computed.get(name, np.nan)
             value = np.where(rows, np.where(np.isnan(x), default, x), value)
             t.fail(rows & np.isnan(value), name.lower(), f"missing: {p.meaning} is required for model {k} (no default)")
@@ -288,7 +295,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
     a_p, w_p = np.where(by_a, a_p, np.asarray(a_of_ratio)), np.where(by_w, w_p, np.asarray(w_of_ratio))
     for col in ("a_p", "accel_ratio", "omega_p", "omega_ratio"):
         t.fail(~is_pulse & t.has(col), col, f"applies only to pulses (pulse = {' / '.join(PULSES)}), not to a record")
-    scale = t.num("scale", 0.0, math.inf, hi_open=True, rows=~is_pulse)
+    scale = t.param(SCALE, rows=~is_pulse)
     params.update(a_p=a_p, omega_p=w_p, scale=np.where(np.isnan(scale), 1.0, scale))
     for name, shared in pulse_params().items():  # the pulse kinds' own parameters, as each row's kind declares them
         col, kinds = name.lower(), pulse_takes(name)
@@ -297,8 +304,7 @@ def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:
         for k in kinds:
             rows = exc == k
             p = PULSE_PARAMS[k][name]
-            x = t.num(col, p.lo, p.hi, lo_open=p.lo_open, hi_open=p.hi_open, rows=rows)
-            t.fail(p.off_step(x), col, lambda i: f"{x[i]:g}; valid: {p.range_text}")
+            x = t.param(p, rows=rows)
             value = np.where(rows, np.where(np.isnan(x), p.default, x), value)
         params[name] = np.where(np.isnan(value), shared.default, value)
 

@@ -35,10 +35,10 @@ from .._rootfind import SafeNewton
 from ..model import AbstractSpringIntegrator, AbstractStepper, FirstStepController, WrappedController, Schedule, check_autodiff, diffrax_adjoint, diffrax_status
 from ..results import Save, Solution, Status
 from .rest import rest_grid, rest_phase, rest_states
-from .system import FlexibleSystem, QuasiRigidSystem, SpringSystem
+from .system import QuasiRigidSystem, SpringSystem
 
 if TYPE_CHECKING:
-    from .model import SpringModel
+    from .model import AbstractSpringModel
 
 _IMPLICIT = {"kvaerno3": diffrax.Kvaerno3, "kvaerno4": diffrax.Kvaerno4, "kvaerno5": diffrax.Kvaerno5}
 _EXPLICIT = {"tsit5": diffrax.Tsit5, "dopri5": diffrax.Dopri5, "dopri8": diffrax.Dopri8}
@@ -125,7 +125,7 @@ class SpringIntegrator(AbstractSpringIntegrator):
 
     def solve(
         self,
-        model: "SpringModel | SpringSystem",
+        model: "AbstractSpringModel | SpringSystem",
         excitation: AbstractExcitation,
         y0,
         t0,

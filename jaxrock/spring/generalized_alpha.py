@@ -71,7 +71,7 @@ from .._validate import JaxrockInputError
 from ..bookkeeping import Record
 from ..model import AbstractModel, AbstractSpringIntegrator, AbstractStepper, Schedule, check_autodiff
 from ..results import Save, Solution, Status
-from .system import FlexibleSystem, QuasiRigidSystem, SpringSystem
+from .system import FlexibleSystem, SpringSystem
 
 
 # Attempted steps per loop step (`GeneralizedAlphaStepper.step`): a run's record of its step ends
