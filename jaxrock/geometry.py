@@ -25,7 +25,7 @@ import equinox as eqx
 from jaxtyping import Array, Float
 
 from ._validate import JaxrockInputError, Limit, check_limits, check_positive, check_range, is_concrete
-from .scene import HEIGHT_RANGE, TAN_ALPHA_MIN, check_slenderness  # the valid slenderness (`jaxrock.scene`)
+from .scene import HEIGHT_RANGE, TAN_ALPHA, TAN_ALPHA_BASE, check_slenderness  # the valid geometry, declared once (`jaxrock.scene`)
 
 G = 9.81  # m/s², SPEC
 
@@ -54,13 +54,15 @@ class Block(eqx.Module):
         check_limits(self.limits())
 
     def limits(self) -> tuple[Limit, ...]:
-        """The valid geometry (`jaxrock._validate.Limit`): 2h in `HEIGHT_RANGE`, TAN_ALPHA_MIN ≤ tanα ≤ tanα′ < 1."""
+        """The valid geometry (`jaxrock._validate.Limit`): 2h in `HEIGHT_RANGE`, tanα and tanα′ in their declared
+        ranges (`jaxrock.scene.TAN_ALPHA`, `TAN_ALPHA_BASE`: [1e-3, 1)), tanα ≤ tanα′."""
         inf = math.inf
         return (
             Limit("h (half-height) [m]", self.h, 0.5 * HEIGHT_RANGE[0], 0.5 * HEIGHT_RANGE[1]),
-            Limit("tan_alpha = b/h", self.b / self.h, TAN_ALPHA_MIN, 1.0, hi_open=True),
+            Limit("tan_alpha = b/h", self.b / self.h, TAN_ALPHA.lo, TAN_ALPHA.hi, TAN_ALPHA.lo_open, TAN_ALPHA.hi_open),
             Limit("b_base/b (base over column half-width)", self.b_base / self.b, 1 - 1e-12, inf, hi_open=True),
-            Limit("tan_alpha_base = b_base/h", self.b_base / self.h, TAN_ALPHA_MIN, 1.0, hi_open=True),
+            Limit("tan_alpha_base = b_base/h", self.b_base / self.h, TAN_ALPHA_BASE.lo, TAN_ALPHA_BASE.hi, TAN_ALPHA_BASE.lo_open,
+                  TAN_ALPHA_BASE.hi_open),
         )
 
     # -- constructors -------------------------------------------------------------------------
