@@ -323,11 +323,10 @@ def SpringModel(block: Block, column: Column | None = None, *, added_masses: boo
     """The paper's spring model of `block`: quasi-rigid (`QuasiRigidSpringModel`) without a
     `column`, flexible (`FlexibleSpringModel`, `zeta` default `CONCRETE_ZETA`, `n_elements` 10)
     with one; the other arguments as `AbstractSpringModel` describes. `zeta` and `n_elements`
-    belong to a column."""
+    belong to a column: without one they act on nothing and are not kept (as before the split,
+    so that code written for either kind, e.g. `SpringModel(block, column, n_elements=4)` with
+    `column` None, runs unchanged)."""
     if column is None:
-        given = [k for k, v in (("zeta", zeta), ("n_elements", n_elements)) if v is not None]
-        if given:
-            raise JaxrockInputError(f"{', '.join(given)}: the quasi-rigid SM (column=None) has no column; give a Column")
         return QuasiRigidSpringModel(block, added_masses=added_masses, cbar=cbar, backbone=backbone, smoothing=smoothing,
                                      fixed_base=fixed_base, threshold=threshold)
     return FlexibleSpringModel(block, column, added_masses=added_masses, cbar=cbar, backbone=backbone, smoothing=smoothing,
