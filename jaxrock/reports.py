@@ -133,13 +133,17 @@ def spectrum_files(spec, out: Path, title: str) -> tuple[Path, Path]:
 
 
 def record_spectrum_files(rs, out: Path, label: str, title: str) -> tuple[Path, Path, Path]:
-    """Write a `RecordSpectrum` as `<out>.nc`, `<out>.csv` (height, least scale, bracket's lower end)
-    and its figure as `<out>.png`."""
+    """Write a `RecordSpectrum` as `<out>.nc`, `<out>.csv` (height, least scale, bracket's lower end,
+    uncertain, the worst status of the height's runs) and its figure as `<out>.png`."""
     nc = rs.save(Path(f"{out}.nc"))
     csv_path = Path(f"{out}.csv")
     rows = [{"height": float(h), "least_scale": float(s), "bracket_low": float(lo)} for h, s, lo in zip(rs.height, rs.scale, rs.bracket_low)]
     if rs.uncertain is not None:
         rows = [{**row, "uncertain": int(u)} for row, u in zip(rows, rs.uncertain)]
+    if rs.worst_status is not None:
+        from .results import STATUS_NAMES
+
+        rows = [{**row, "worst_status": STATUS_NAMES[int(w)]} for row, w in zip(rows, rs.worst_status)]
     write_table(csv_path, rows)
     png = Path(f"{out}.png")
     plt.close(plot_record_spectrum([rs], [label], path=png, title=title))

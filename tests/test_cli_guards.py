@@ -45,6 +45,29 @@ def test_spectrum_failed_cells_exit_1_after_writing(tmp_path):
     assert Spectrum.load(tmp_path / "spec.nc").status.ravel().tolist() == [int(jr.status_codes(jr.Status.solver_failed))]
 
 
+def test_record_spectrum_failed_runs_exit_1_files_with_the_users_umask(tmp_path):
+    """Generalized-α at 1e-14 on El Centro hits its step bound: the table says which heights, the
+    CSV and netCDF carry the worst status, and the exit code is 1 (was 0: record-spectrum never
+    checked its runs' status). Written under umask 022, every output is 0644 (was 0600)."""
+    import stat
+
+    import xarray as xr
+
+    old = os.umask(0o022)
+    try:
+        r = invoke("record-spectrum", "--model", "spring", "--tol", 1e-14, "--heights", "2,4", "--scales", "0.5,1",
+                   "--refine", 1, "--out", tmp_path / "rs", "--quiet", "--no-sensitivity")
+    finally:
+        os.umask(old)
+    assert r.exit_code == 1, r.output
+    assert "2 height(s) ended with status max_steps" in r.output and "(a run max_steps)" in r.output
+    assert "worst_status" in (tmp_path / "rs.csv").read_text().splitlines()[0]
+    with xr.open_dataset(tmp_path / "rs.nc", engine="scipy") as ds:
+        assert (ds.worst_status.values > 0).all()
+    for suffix in (".nc", ".csv", ".png"):
+        assert stat.S_IMODE((tmp_path / f"rs{suffix}").stat().st_mode) == 0o644, suffix
+
+
 @pytest.mark.slow
 def test_calibrate_not_converged_exits_1(tmp_path):
     """Two optimiser iterations cannot meet the calibration's stopping test: every slenderness is

@@ -270,7 +270,8 @@ class RecordSpectrum(eqx.Module):
     `scale[i]` is the least factor of the sweep (refined by bisection to `tolerance`) that
     overturns the body of height `height[i]`; +inf where no factor of the sweep overturns it.
     `uncertain[i]`: a run that decided it has an uncertain verdict (`jaxrock.sensitivity`; None:
-    not computed).
+    not computed). `worst_status[i]`: the largest `jaxrock.Status` code of the height's runs (0:
+    all ok; None: not known).
     """
 
     height: np.ndarray
@@ -278,6 +279,7 @@ class RecordSpectrum(eqx.Module):
     bracket_low: np.ndarray
     attrs: dict
     uncertain: np.ndarray | None = None
+    worst_status: np.ndarray | None = None
 
     def save(self, path) -> Path:
         import xarray as xr
@@ -291,6 +293,8 @@ class RecordSpectrum(eqx.Module):
                 **({} if self.uncertain is None else {"uncertain": (("height",), np.asarray(self.uncertain, np.int8), {
                     "long_name": "a run that decided the least scale has an uncertain verdict (jaxrock.sensitivity)", "units": "1",
                     "flag_values": np.array([0, 1], np.int8), "flag_meanings": "certain uncertain"})}),
+                **({} if self.worst_status is None else {"worst_status": (("height",), np.asarray(self.worst_status, np.int32), {
+                    "long_name": "largest jaxrock.Status code of the height's runs (0: all ok)"})}),
             },
             coords={"height": ("height", self.height, {"long_name": "2h", "units": "m"})},
             attrs={k: str(v) for k, v in self.attrs.items()},
@@ -333,4 +337,5 @@ def record_overturning_scale(
     attrs = {"model": type(model).__name__, "record": record.name, "tan_alpha": float(tan_a), "tan_alpha_base": float(tan_b),
              **provenance.file_attrs(model, integrator)}
     return RecordSpectrum(height=hs, scale=least, bracket_low=low, attrs=attrs,
-                          uncertain=ds.least_scale_uncertain.values[0] if sensitivity else None)
+                          uncertain=ds.least_scale_uncertain.values[0] if sensitivity else None,
+                          worst_status=ds.worst_status.values[0])

@@ -275,6 +275,7 @@ def record_spectrum(
     units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
                                  "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
     refine: int = typer.Option(8, help="bisections refining the least overturning factor (resolution: sweep step / 2^refine)"),
+    tol: Optional[float] = typer.Option(None, help="spring models: generalized-α at this local tolerance (default: the model's default integrator)"),
     out: str = typer.Option("out/record_spectrum", help="output stem: <out>.nc, <out>.csv, <out>.png; a folder (or a path "
                             "ending in /) means <out>/record_spectrum.*"),
     sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
@@ -290,6 +291,7 @@ def record_spectrum(
     sc = parse_values("--scales", scales)
     _check_refine(refine)
     m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
+    integ = _integrator(model, tol)
     exc, desc = _excitation(m.block, DEFAULT_PULSE, record, 1.0, None, None, None, None, units)
     out = output_stem(out, "record_spectrum")
     for suffix in (".nc", ".csv", ".png"):
@@ -301,18 +303,23 @@ def record_spectrum(
     from ..reports import record_spectrum_files
 
     t0 = time.perf_counter()
-    rs = record_overturning_scale(m, exc, hs, sc, refine=refine, progress=not quiet, sensitivity=sensitivity)
+    rs = record_overturning_scale(m, exc, hs, sc, refine=refine, integrator=integ, progress=not quiet, sensitivity=sensitivity)
     seconds = time.perf_counter() - t0
-    rs = type(rs)(height=rs.height, scale=rs.scale, bracket_low=rs.bracket_low,
-                  attrs={**rs.attrs, "model_kind": model.value, "history": _history()}, uncertain=rs.uncertain)
+    import equinox as eqx
+
+    rs = eqx.tree_at(lambda r: r.attrs, rs, {**rs.attrs, "model_kind": model.value, "history": _history()})
     nc, csv_path, png = record_spectrum_files(rs, out, f"{model.value}, tanα = {tan_alpha:g}", f"least overturning factor of {desc}")
     typer.echo(f"{desc}; {model.value} model, tanα = {tan_alpha:g}; {len(hs)} heights × {len(sc)} factors in {seconds:.1f} s")
     typer.echo(f"{'2h [m]':>8} {'least factor':>13}")
     doubt = np.zeros(rs.height.size, bool) if rs.uncertain is None else np.asarray(rs.uncertain, bool)
-    for h, s, u in zip(rs.height, rs.scale, doubt):
-        typer.echo(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}{'  (uncertain)' if u else ''}")
+    from ..results import STATUS_NAMES
+
+    for h, s, u, w in zip(rs.height, rs.scale, doubt, rs.worst_status):
+        typer.echo(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}{'  (uncertain)' if u else ''}"
+                   f"{f'  (a run {STATUS_NAMES[int(w)]})' if w else ''}")
     typer.echo(uncertain_line(rs.uncertain, what="least factor(s)"))
     typer.echo(f"wrote {nc}, {csv_path}, {png}")
+    _exit_if_untrusted(_status_counts(rs.worst_status), "height(s)")
 
 
 # ----------------------------------------------------------------------------------------------
