@@ -21,7 +21,7 @@ import numpy as np
 from .. import interrupt
 from .._validate import JaxrockInputError, check_grid
 from ..excitation import Record
-from ..io import provenance
+from ..io import cf, provenance
 from ..io.files import write_output
 from ..model import AbstractIntegrator, AbstractModel
 from ..results import OUTPUTS, STATUS_NAMES, SUMMARY, schema_module
@@ -40,12 +40,18 @@ def _flags(long_name: str, meanings, dtype=np.int8) -> dict:
 
 
 def _netcdf_variable(o, values, dims) -> tuple:
-    """A summary output (`jaxrock.results.Output`) as a netCDF variable: flags as CF flags (int8),
-    counts as int32 (netCDF-3 has no int64), numbers as they are."""
+    """A summary output (`jaxrock.results.Output`) as a netCDF variable: flags as CF flags (int8,
+    "not_overturned overturned"), counts as int32 (netCDF-3 has no int64), a time's "never"
+    (+inf) as the fill value (`jaxrock.io.cf.encode_never`), numbers as they are."""
     if o.kind == "bool":
-        return dims, values.astype(np.int8), {**_flags(o.name, ("no", o.name)), "long_name": o.meaning}
+        return dims, values.astype(np.int8), {**_flags(o.name, (f"not_{o.name}", o.name)), "long_name": o.meaning}
+    if o.units == "s":
+        return (dims, *cf.encode_never(values, {"long_name": o.meaning, "units": o.units}, INVALID_FILL))
     data = values.astype(np.int32) if o.kind == "int" else values
     return dims, data, {"long_name": o.meaning, "units": o.units}
+
+
+INVALID_FILL = "or the scene is invalid (status invalid_input)"
 
 
 class _AbstractSpectrum(eqx.Module):
@@ -95,17 +101,17 @@ class _AbstractSpectrum(eqx.Module):
             coords={
                 **{k: (k, getattr(self, k), {"long_name": AXES[k], "units": "1"}) for k in ("omega_ratio", "accel_ratio")},
             },
-            attrs={**{k: (str(v) if not isinstance(v, (int, float, str)) else v) for k, v in self.attrs.items()},
-                   "refined": int(self.uplift_line is not None)},
+            attrs={**self.attrs, "refined": int(self.uplift_line is not None)},
         )
-        return ds
+        return cf.encode(ds, self.attrs.get("title") or f"jaxrock overturning spectrum: {self.attrs.get('model', 'model')}, "
+                         f"{self.attrs.get('pulse', 'pulse')}")
 
     def save(self, path) -> Path:
         """Write a netCDF file (readable by xarray, netCDF tools and `Spectrum.load`)."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         ds = self.to_xarray()
-        return write_output(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))
+        return write_output(path, lambda tmp: cf.write_netcdf(ds, tmp))
 
     @classmethod
     def load(cls, path) -> "Spectrum":
@@ -119,12 +125,19 @@ class _AbstractSpectrum(eqx.Module):
                 raise JaxrockInputError(f"{path}: no variable(s) {', '.join(missing)} (written by jaxrock "
                                         f"{ds.attrs.get('jaxrock_version', 'of another version')}); rerun the spectrum")
             refined = bool(ds.attrs.get("refined"))
+            status = ds["status"].values.astype(np.int32)
+            valid = status != STATUS_NAMES.index("invalid_input")
+
+            def values(name, o):  # a time's fill value: never, where the scene is valid (`_netcdf_variable`)
+                v = ds[name].values.astype(o.dtype)
+                return np.where(np.isnan(v) & valid, np.inf, v) if o.units == "s" else v
+
             return cls(
                 omega_ratio=ds["omega_ratio"].values.copy(),
                 accel_ratio=ds["accel_ratio"].values.copy(),
-                **{name: ds[name].values.astype(o.dtype) for name, o in OUTPUTS.items()},
-                status=ds["status"].values.astype(np.int32),
-                attrs={k: v for k, v in ds.attrs.items() if k != "refined"},
+                **{name: values(name, o) for name, o in OUTPUTS.items()},
+                status=status,
+                attrs={k: v for k, v in cf.decode_attrs(ds).items() if k not in ("refined", "references")},
                 uplift_line=ds["uplift_boundary"].values.copy() if refined else None,
                 overturn_line=ds["overturn_boundary"].values.copy() if refined else None,
             )
@@ -205,11 +218,11 @@ def overturning_spectrum(
         "pulse": cls.__name__,
         **{k: float(v) for k, v in sweep.fixed.items() if k in pp},
         "threshold": float(model.threshold),
-        "tan_alpha": float(jnp.tan(block.alpha_r)),
+        "tan_alpha": cf.input_value(jnp.tan(block.alpha_r)),
         "alpha": float(block.alpha_r),
         "p": float(block.p_r),
-        "height": float(block.height),
-        "width": float(block.width),
+        "height": cf.input_value(block.height),
+        "width": cf.input_value(block.width),
         **provenance.file_attrs(model, integrator),
         "made_by": ds.attrs["made_by"],
     }
@@ -288,7 +301,8 @@ class RecordSpectrum(eqx.Module):
         path.parent.mkdir(parents=True, exist_ok=True)
         ds = xr.Dataset(
             {
-                "scale": (("height",), self.scale, {"long_name": "least overturning scale factor", "units": "1"}),
+                "scale": (("height",), *cf.encode_never(self.scale, {"long_name": "least overturning scale factor", "units": "1"},
+                                                       "no factor of the sweep overturns")),
                 "bracket_low": (("height",), self.bracket_low, {"long_name": "largest scale below it that does not overturn", "units": "1"}),
                 **({} if self.uncertain is None else {"uncertain": (("height",), np.asarray(self.uncertain, np.int8), {
                     "long_name": "a run that decided the least scale has an uncertain verdict (jaxrock.sensitivity)", "units": "1",
@@ -297,9 +311,11 @@ class RecordSpectrum(eqx.Module):
                     "long_name": "largest jaxrock.Status code of the height's runs (0: all ok)"})}),
             },
             coords={"height": ("height", self.height, {"long_name": "2h", "units": "m"})},
-            attrs={k: str(v) for k, v in self.attrs.items()},
+            attrs=self.attrs,
         )
-        return write_output(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))
+        ds = cf.encode(ds, self.attrs.get("title") or f"jaxrock least overturning scale factor: {self.attrs.get('record', 'record')}, "
+                       f"{self.attrs.get('model', 'model')}")
+        return write_output(path, lambda tmp: cf.write_netcdf(ds, tmp))
 
 
 def record_overturning_scale(
@@ -334,7 +350,7 @@ def record_overturning_scale(
     sweep = Sweep.make(model, records=[record], height=hs, scale=sc, integrator=integrator, chunk_size=sc.size, sensitivity=sensitivity)
     ds = least_overturning_scale(sweep, refine=refine, progress=progress)
     least, low = ds.least_scale.values[0], ds.bracket_low.values[0]
-    attrs = {"model": type(model).__name__, "record": record.name, "tan_alpha": float(tan_a), "tan_alpha_base": float(tan_b),
+    attrs = {"model": type(model).__name__, "record": record.name, "tan_alpha": cf.input_value(tan_a), "tan_alpha_base": cf.input_value(tan_b),
              **provenance.file_attrs(model, integrator)}
     return RecordSpectrum(height=hs, scale=least, bracket_low=low, attrs=attrs,
                           uncertain=ds.least_scale_uncertain.values[0] if sensitivity else None,

@@ -51,11 +51,14 @@ def describe(*, model, excitation: str, integrator=None, grid: dict | None = Non
 
 
 def file_attrs(model, integrator=None) -> dict:
-    """Attributes that say how a result file was made: package and JAX versions, the integrator
+    """Attributes that say how a result file was made: CF's conventions and references, package and JAX versions, the integrator
     and its settings, the model's energy loss (η of the rigid model or c̄ of the spring model) and
     the full description (`describe`, as JSON in `made_by`)."""
+    from .cf import CONVENTIONS, references
+
     attrs = {
-        "Conventions": "CF-1.8",
+        "Conventions": CONVENTIONS,
+        "references": references(),
         "source": f"jaxrock {package_version()} (jax {jax.__version__})",
         "jaxrock_version": package_version(),
         "jax_version": jax.__version__,
