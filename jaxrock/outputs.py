@@ -92,6 +92,24 @@ OUTPUTS = {o.name: o for o in SUMMARY}
 RESULT_COLUMNS: tuple[str, ...] = (*OUTPUTS, "status")  # a results row: the summary, then the status name
 
 
+# the fields a time history can hold (`jaxrock.Save`; each model's `history_fields`): long name, CF units
+HISTORY_FIELDS: dict[str, tuple[str, str]] = {
+    "theta": ("rotation theta of the body", "rad"),
+    "theta_dot": ("angular velocity of the body", "rad s-1"),
+    "u_top": ("horizontal displacement of the column's top", "m"),
+    "w_top": ("the column's top displacement relative to the rigid rotation", "m"),
+    "base_moment": ("moment at the base spring", "N m"),
+    "section_moment": ("bending moment of the column's base section", "N m"),
+    "kinetic": ("kinetic energy", "J"),
+    "potential": ("potential energy (gravity, spring and column strain, from the rest state)", "J"),
+    "elastic": ("strain energy of the column", "J"),
+    "dissipated": ("energy dissipated (damper + rayleigh)", "J"),
+    "damper": ("work of the base damper", "J"),
+    "rayleigh": ("work of the column's Rayleigh damping", "J"),
+    "input": ("work of the ground on the body", "J"),
+}
+
+
 def computed(o: Output, values: dict) -> bool:
     """Whether the output `o` was computed, given every output's values (`values[name]`): False where
     it `needs` one whose values are all its absent NaN."""

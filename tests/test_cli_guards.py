@@ -287,7 +287,7 @@ def test_lock_of_a_dead_run_is_taken_over_and_released(tmp_path):
     "args, needle",
     [
         (["record-spectrum", "--heights", "1,,3"], "--heights = '1,,3' has an empty item"),
-        (["simulate", "--t-free", "-1"], "--t-free applies to the time-history plot"),
+        (["simulate", "--t-free", "-1"], "--t-free applies to the time history"),
         (["simulate", "--plot", "h.png", "--n-points", "0"], "--n-points = 0; valid: an integer in [2, 1,000,000]"),
         (["simulate", "--plot", "h.png", "--t-free", "-1"], "--t-free = -1 is outside the valid range"),
         (["simulate", "--tan-alpha", "1e-8"], "tan_alpha = 1e-08 is outside the valid range [0.001, 1)"),

@@ -33,25 +33,6 @@ from .suite import least_overturning_scale
 from .sweep import Sweep, run_sweep
 
 
-def _flags(long_name: str, meanings, dtype=np.int8) -> dict:
-    """CF flag attributes: `flag_values` beside `flag_meanings` (and units 1)."""
-    return {"long_name": long_name, "units": "1", "flag_values": np.arange(len(meanings), dtype=dtype),
-            "flag_meanings": " ".join(meanings)}
-
-
-def _netcdf_variable(o, values, dims) -> tuple:
-    """A summary output (`jaxrock.results.Output`) as a netCDF variable: flags as CF flags (int8,
-    "not_overturned overturned"), counts as int32 (netCDF-3 has no int64), a time's "never"
-    (+inf) as the fill value (`jaxrock.io.cf.encode_never`), numbers as they are."""
-    if o.kind == "bool":
-        return dims, values.astype(np.int8), {**_flags(o.name, (f"not_{o.name}", o.name)), "long_name": o.meaning}
-    if o.units == "s":
-        return (dims, *cf.encode_never(values, {"long_name": o.meaning, "units": o.units}, INVALID_FILL))
-    data = values.astype(np.int32) if o.kind == "int" else values
-    return dims, data, {"long_name": o.meaning, "units": o.units}
-
-
-INVALID_FILL = "or the scene is invalid (status invalid_input)"
 
 
 class _AbstractSpectrum(eqx.Module):
@@ -93,8 +74,8 @@ class _AbstractSpectrum(eqx.Module):
         dims = ("accel_ratio", "omega_ratio")
         ds = xr.Dataset(
             {
-                **{o.name: _netcdf_variable(o, getattr(self, o.name), dims) for o in SUMMARY},
-                "status": (dims, self.status.astype(np.int32), _flags("jaxrock.Status code", STATUS_NAMES, np.int32)),
+                **{o.name: cf.output_variable(o, getattr(self, o.name), dims) for o in SUMMARY},
+                "status": (dims, self.status.astype(np.int32), cf.flags("jaxrock.Status code", STATUS_NAMES, np.int32)),
                 "uplift_boundary": (("omega_ratio",), self.uplift_boundary, {"long_name": "least a_p/(g tan alpha) that uplifts", "units": "1"}),
                 "overturn_boundary": (("omega_ratio",), self.overturn_boundary, {"long_name": "least a_p/(g tan alpha) that overturns", "units": "1"}),
             },
@@ -128,7 +109,7 @@ class _AbstractSpectrum(eqx.Module):
             status = ds["status"].values.astype(np.int32)
             valid = status != STATUS_NAMES.index("invalid_input")
 
-            def values(name, o):  # a time's fill value: never, where the scene is valid (`_netcdf_variable`)
+            def values(name, o):  # a time's fill value: never, where the scene is valid (`jaxrock.io.cf.output_variable`)
                 v = ds[name].values.astype(o.dtype)
                 return np.where(np.isnan(v) & valid, np.inf, v) if o.units == "s" else v
 

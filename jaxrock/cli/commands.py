@@ -14,7 +14,7 @@ import numpy as np
 import typer
 
 from . import guards
-from .guards import (EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untrusted, _guarded,
+from .guards import (report, say, EXIT_INTERRUPTED, EXIT_UNTRUSTED, _estimate, _exit_if_untrusted, _guarded,
                      _history, _hold, _interrupted, _OneLineErrors, _resume_command, _status_counts, record_run_seconds,
                      SENSITIVITY_COST, cell_seconds)
 from ..outputs import OUTPUTS, RESULT_COLUMNS
@@ -25,15 +25,20 @@ from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _axis
                       _integrator, build_model, figure_path, parse_values, solution_summary, spectrum_summary, SENSITIVITY_HELP,
                       LIST_HELP as _LIST, check_pulse_params, split_params, uncertain_line, with_params)
 
+JSON_OPTION = typer.Option(False, "--json", help="print the summary as one JSON document on stdout instead of text (units in its "
+                           "'units'; null: never, or not computed); warnings stay on stderr")
 FORCE_OPTION = typer.Option(False, "--force", help="let outputs replace existing files that jaxrock did not write "
                             "(without it such a file is refused; symbolic links always are)")
 BACKBONE_DEFAULTS = ", ".join(f"{v} {k}" for k, v in DEFAULT_BACKBONE.items())
 SMOOTHING_DEFAULTS = ", ".join(f"{v:g} {k}" for k, v in DEFAULT_SMOOTHING.items())
 UNDAMPED_HELP = "no energy loss: " + ", ".join(f"{k} = {v:g}" for k, v in UNDAMPED.items()) + " (whichever the model takes)"
 
+RATIO_UNITS = {"omega_ratio": "1 (omega_p/p')", "accel_ratio": "1 (a_p/(g tan alpha'))"}  # --json: the grid's axes
+
 app = typer.Typer(
     cls=_OneLineErrors,
-    add_completion=False,
+    add_completion=True,  # --install-completion / --show-completion (bash, zsh, fish, PowerShell)
+    context_settings={"help_option_names": ["-h", "--help"]},
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     rich_markup_mode=None,  # help texts are shown as written: units "[m]" and ranges "a:b:n" are not markup
@@ -70,6 +75,7 @@ def spectrum(
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP + "; off by default on pulses "
                                      "(none of 240 seeded pulse cells changed verdict, benchmarks/study_uncertain.py)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),
     **params: Optional[float],
@@ -113,8 +119,19 @@ def spectrum(
         import shutil
 
         shutil.rmtree(ck)
-    typer.echo(spectrum_summary(spec, seconds))
-    typer.echo(f"wrote {nc} and {png}")
+    say(spectrum_summary(spec, seconds))
+    say(f"wrote {nc} and {png}")
+    from ..outputs import OUTPUTS, computed
+
+    report("spectrum", {"model": model.value, "pulse": pulse.value, **pulse_kw, "height": height, "tan_alpha": tan_alpha,
+                        "tan_alpha_base": tan_alpha_base, "alpha": spec.attrs["alpha"], "p": spec.attrs["p"],
+                        "omega_ratio": spec.omega_ratio, "accel_ratio": spec.accel_ratio, "cells": spec.max_theta.size,
+                        "overturned": int(spec.overturned.sum()), "uplifted": int(spec.uplifted.sum()),
+                        "uncertain": int(spec.uncertain.sum()) if computed(OUTPUTS["uncertain"], {"sensitivity": spec.sensitivity}) else None,
+                        "uplift_boundary": spec.uplift_boundary, "overturn_boundary": spec.overturn_boundary,
+                        "status": _status_counts(spec.status), "seconds": seconds, "files": [nc, png]},
+           {"height": "m", "alpha": "rad", "p": "rad/s", "seconds": "s", **RATIO_UNITS,
+            "uplift_boundary": "1 (a_p/(g tan alpha') per omega_ratio; null: none in the grid)", "overturn_boundary": "1 (as uplift_boundary)"})
     _exit_if_untrusted(_status_counts(spec.status), "cell(s)")
 
 
@@ -154,27 +171,33 @@ def simulate(
     tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
     plot: Optional[str] = typer.Option(None, help="write a time-history plot here (PNG; another suffix matplotlib knows, e.g. .pdf, "
                                        "picks that format)"),
-    t_free: Optional[float] = typer.Option(None, help="plot: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
-    n_points: Optional[int] = typer.Option(None, help=f"plot: number of saved time points, 2 to {MAX_PLOT_POINTS:,} (default 1500)"),
+    save_path: Optional[str] = typer.Option(None, "--save", help="write the time history here: time, ground acceleration and every "
+                                            "field the model gives, with the summary (.nc: netCDF, CF-1.8; .csv)"),
+    t_free: Optional[float] = typer.Option(None, help="plot and history: free-rocking time after the excitation [s] (default 2 × 2π/p)"),
+    n_points: Optional[int] = typer.Option(None, help=f"plot and history: number of saved time points, 2 to {MAX_PLOT_POINTS:,} (default 1500)"),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
+    as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
     **params: Optional[float],
 ):
-    """One scene: prints max θ/α, overturning, uplift, impacts and the run status."""
+    """One scene: prints max θ/α, overturning, uplift, impacts and the run status; --plot draws
+    and --save writes its time history."""
     model_kw, pulse_kw = split_params(params)
     m = build_model(model, height, tan_alpha, tan_alpha_base, undamped=undamped, backbone=backbone, smoothing=smoothing, **model_kw)
     exc, desc = _excitation(m.block, pulse.value, record, scale, a_p, accel_ratio, omega_p, omega_ratio, units, pulse_kw)
     integ = _integrator(model, tol)
-    if plot is None:
+    if plot is None and save_path is None:
         from .._validate import JaxrockInputError
 
         for flag, v in (("--t-free", t_free), ("--n-points", n_points)):
             if v is not None:
-                raise JaxrockInputError(f"{flag} applies to the time-history plot: give --plot FILE.png as well")
+                raise JaxrockInputError(f"{flag} applies to the time history: give --plot FILE.png or --save FILE.nc as well")
     else:
         from .._validate import JaxrockInputError, check_positive
+        from ..io.history_file import check_history_path
 
-        plot = figure_path("--plot", plot)
+        plot = None if plot is None else figure_path("--plot", plot)
+        save_path = None if save_path is None else check_history_path("--save", save_path)
         n_points = 1500 if n_points is None else n_points
         if not 2 <= n_points <= MAX_PLOT_POINTS:
             raise JaxrockInputError(f"--n-points = {n_points}; valid: an integer in [2, {MAX_PLOT_POINTS:,}] (a figure shows a few thousand)")
@@ -185,13 +208,14 @@ def simulate(
     t0 = time.perf_counter()
     sol = jax.block_until_ready(_simulate(m, exc, integrator=integ, sensitivity=sensitivity))  # JAX returns before it has computed
     seconds = time.perf_counter() - t0
-    typer.echo(f"{model.value} model, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}")
-    typer.echo(solution_summary(sol, m))
-    typer.echo(f"run time {seconds:.2f} s (with compilation)")
+    say(f"{model.value} model, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}")
+    say(solution_summary(sol, m))
+    say(f"run time {seconds:.2f} s (with compilation)")
     from ..interrupt import stop_point
 
     stop_point()
-    if plot is not None:
+    written = []
+    if plot is not None or save_path is not None:
         p = float(m.block.p_r)
         tf = 2 * 2 * math.pi / p if t_free is None else t_free
         t_start, t_end = float(exc.t_start), float(exc.t_end)
@@ -202,14 +226,32 @@ def simulate(
         from ..plotting import plot_history
         from ..results import Save
 
-        hist = _simulate(m, exc, save=Save(ts, ("theta",)), integrator=integ)
-        import matplotlib.pyplot as plt
+        hist = _simulate(m, exc, save=Save(ts, m.history_fields if save_path is not None else ("theta",)), integrator=integ)
+        title = f"{model.value}, 2h = {height:g} m, tanα = {tan_alpha:g}; {desc}"
+        if plot is not None:
+            import matplotlib.pyplot as plt
 
-        fig = plot_history(hist, exc, model=m, path=plot, title=f"{model.value}, 2h = {height:g} m, tanα = {tan_alpha:g}\n{desc}")
-        plt.close(fig)
-        typer.echo(f"wrote {plot}")
-    from ..results import status_codes
+            plt.close(plot_history(hist, exc, model=m, path=plot, title=title.replace("; ", "\n")))
+            written.append(plot)
+        if save_path is not None:
+            import jax
 
+            from ..io.history_file import save_history
+            from ..io.provenance import file_attrs
+
+            attrs = {"model_kind": model.value, "excitation": desc, "height": height, "tan_alpha": tan_alpha,
+                     **({} if tan_alpha_base is None else {"tan_alpha_base": tan_alpha_base}), **file_attrs(m, integ),
+                     "history": _history()}
+            written.append(save_history(hist, jax.vmap(exc)(hist.ts), save_path, attrs, f"jaxrock time history: {title}"))
+        say(f"wrote {', '.join(str(w) for w in written)}")
+    from ..outputs import OUTPUTS
+    from ..results import status_codes, status_names
+
+    report("simulate", {"model": model.value, "excitation": desc, "height": height, "tan_alpha": tan_alpha,
+                        "tan_alpha_base": tan_alpha_base, "alpha": float(m.block.alpha_r), "p": float(m.block.p_r),
+                        **{k: np.asarray(getattr(sol, k)) for k in OUTPUTS}, "status": str(status_names(sol.status)),
+                        "seconds": seconds, "files": written},
+           {"height": "m", "alpha": "rad", "p": "rad/s", "seconds": "s", **{k: o.units for k, o in OUTPUTS.items()}})
     _exit_if_untrusted(_status_counts(status_codes(sol.status)), "run")
 
 
@@ -230,6 +272,7 @@ def batch(
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     force: bool = FORCE_OPTION,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
 ):
     from .._validate import check_writable
     from ..io.results_file import count_results, results_path_for
@@ -245,13 +288,15 @@ def batch(
         typer.echo(f"interrupted: {count_results(results):,} rows kept in {results}; resume with: {_resume_command('--resume')}",
                    err=True)
         raise typer.Exit(EXIT_INTERRUPTED) from None
-    typer.echo(
+    say(
         f"{rep.n_rows} rows: {rep.n_run} run in {rep.n_groups} group(s), {rep.n_skipped} skipped (already done); "
         f"{rep.seconds:.1f} s"
     )
-    typer.echo("; ".join(f"{OUTPUTS[k].label}: {v}" for k, v in rep.flag_counts.items()) + "; status: "
+    say("; ".join(f"{OUTPUTS[k].label}: {v}" for k, v in rep.flag_counts.items()) + "; status: "
                + ", ".join(f"{k} {v}" for k, v in rep.status_counts.items()))
-    typer.echo(f"wrote {rep.path}")
+    say(f"wrote {rep.path}")
+    report("batch", {"rows": rep.n_rows, "run": rep.n_run, "groups": rep.n_groups, "skipped": rep.n_skipped, **rep.flag_counts,
+                     "status": rep.status_counts, "seconds": rep.seconds, "files": [rep.path]}, {"seconds": "s"})
     _exit_if_untrusted(rep.status_counts, "row(s)")
 
 
@@ -280,6 +325,7 @@ def record_spectrum(
                             "ending in /) means <out>/record_spectrum.*"),
     sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h"),
 ):
@@ -309,16 +355,21 @@ def record_spectrum(
 
     rs = eqx.tree_at(lambda r: r.attrs, rs, {**rs.attrs, "model_kind": model.value, "history": _history()})
     nc, csv_path, png = record_spectrum_files(rs, out, f"{model.value}, tanα = {tan_alpha:g}", f"least overturning factor of {desc}")
-    typer.echo(f"{desc}; {model.value} model, tanα = {tan_alpha:g}; {len(hs)} heights × {len(sc)} factors in {seconds:.1f} s")
-    typer.echo(f"{'2h [m]':>8} {'least factor':>13}")
+    say(f"{desc}; {model.value} model, tanα = {tan_alpha:g}; {len(hs)} heights × {len(sc)} factors in {seconds:.1f} s")
+    say(f"{'2h [m]':>8} {'least factor':>13}")
     doubt = np.zeros(rs.height.size, bool) if rs.uncertain is None else np.asarray(rs.uncertain, bool)
     from ..results import STATUS_NAMES
 
     for h, s, u, w in zip(rs.height, rs.scale, doubt, rs.worst_status):
-        typer.echo(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}{'  (uncertain)' if u else ''}"
+        say(f"{h:8.3g} {('> %g' % sc[-1]) if not np.isfinite(s) else ('%.4g' % s):>13}{'  (uncertain)' if u else ''}"
                    f"{f'  (a run {STATUS_NAMES[int(w)]})' if w else ''}")
-    typer.echo(uncertain_line(rs.uncertain, what="least factor(s)"))
-    typer.echo(f"wrote {nc}, {csv_path}, {png}")
+    say(uncertain_line(rs.uncertain, what="least factor(s)"))
+    say(f"wrote {nc}, {csv_path}, {png}")
+    report("record-spectrum", {"record": desc, "model": model.value, "tan_alpha": tan_alpha, "tan_alpha_base": tan_alpha_base,
+                               "scale": sc, "height": rs.height, "least_scale": rs.scale, "bracket_low": rs.bracket_low,
+                               "uncertain": rs.uncertain, "worst_status": [STATUS_NAMES[int(w)] for w in rs.worst_status],
+                               "seconds": seconds, "files": [nc, csv_path, png]},
+           {"height": "m", "seconds": "s", "least_scale": "1 (factor on the record; null: none of the sweep overturns)"})
     _exit_if_untrusted(_status_counts(rs.worst_status), "height(s)")
 
 
@@ -353,6 +404,7 @@ def sweep(
                                             "jaxrock[distributed]"),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h or 2 GB"),
     **params: Optional[str],
 ):
@@ -360,7 +412,7 @@ def sweep(
     parameters) into a chunked Zarr store: resumable, a chunk per local device at a time, or spread
     over a Dask cluster."""
     from .._validate import JaxrockInputError, check_writable
-    from ..scene import takes
+    from ..scene import sweep_quantities, takes
 
     _check_count("--chunk-size", chunk_size)
     if devices is not None:
@@ -447,12 +499,18 @@ def sweep(
     where = f"Dask cluster {scheduler}" if scheduler else f"{len(devs)} device(s)"
     before = sw.size - ran
     resumed = f" ({before:,} were in the store already)" if before else ""
-    typer.echo(f"sweep: {sw.model} model, {dims} = {sw.size:,} scenes in {sw.n_chunks} chunk(s) of ≤ {math.prod(sw.chunk_shape):,}; "
+    say(f"sweep: {sw.model} model, {dims} = {sw.size:,} scenes in {sw.n_chunks} chunk(s) of ≤ {math.prod(sw.chunk_shape):,}; "
                f"{ran:,} run in {seconds:.1f} s ({ran / seconds:,.0f} scenes/s with compilation) on {where}{resumed}")
-    typer.echo(f"overturned: {int(ds.overturned.sum()):,} scenes ({100 * float(ds.overturned.mean()):.1f} %); uplifted: "
+    say(f"overturned: {int(ds.overturned.sum()):,} scenes ({100 * float(ds.overturned.mean()):.1f} %); uplifted: "
                f"{int(ds.uplifted.sum()):,}")
-    typer.echo(uncertain_line(ds.uncertain.values if sensitivity else None, what="scenes"))
-    typer.echo(f"wrote {store}")
+    say(uncertain_line(ds.uncertain.values if sensitivity else None, what="scenes"))
+    say(f"wrote {store}")
+    report("sweep", {"model": sw.model, "axes": {k: np.asarray(v) if k != "record" else list(v) for k, v in sw.axes.items()},
+                     "scenes": sw.size, "chunks": sw.n_chunks, "run": ran, "overturned": int(ds.overturned.sum()),
+                     "uplifted": int(ds.uplifted.sum()), "uncertain": int(ds.uncertain.sum()) if sensitivity else None,
+                     "status": _status_counts(ds.status.values), "seconds": seconds, "files": [store]},
+           {"seconds": "s", **{k: u for k, (_, u, _) in sweep_quantities(sw.model if isinstance(sw.model, str) else None).items()
+                               if k in sw.axes and u}})
     _exit_if_untrusted(_status_counts(ds.status.values), "scene(s)")
 
 
@@ -500,6 +558,7 @@ def suite(
     ensemble: int = typer.Option(0, help=f"replace each uncertain verdict by the fraction of this many runs at its factor x (1 ± 1e-7) "
                                  f"that overturn, and fit the fragility on those fractions (0 to {MAX_ENSEMBLE}; 0: the verdicts)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a suite estimated beyond 1 h"),
 ):
@@ -563,16 +622,31 @@ def suite(
         raise typer.Exit(EXIT_INTERRUPTED) from None
     secs = time.perf_counter() - t0
     files = suite_files(ds, out, f"{len(recs)} records")
-    typer.echo(f"suite: {len(recs)} records × {len(kinds)} model(s) × {ds.sizes['scale']} factors"
+    say(f"suite: {len(recs)} records × {len(kinds)} model(s) × {ds.sizes['scale']} factors"
                + "".join(f" × {len(v)} {k}" for k, v in given.items() if np.ndim(v)) + f" in {secs:.1f} s")
-    typer.echo(f"{'record':<24}{'PGA [g]':>9}{'PGV [m/s]':>11}{'D5-95 [s]':>11}")
+    say(f"{'record':<24}{'PGA [g]':>9}{'PGV [m/s]':>11}{'D5-95 [s]':>11}")
     for r in range(ds.sizes["record"]):
         one = ds.isel(record=r)
-        typer.echo(f"{str(one.record.values)[:23]:<24}{float(one.pga) / G:9.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
-    typer.echo(Path(files["table"]).read_text(encoding="utf-8").split("\n\n")[1])
-    typer.echo(uncertain_line(ds.least_scale_uncertain.values if sensitivity else None, ds.uncertain.values, "least factor(s)",
+        say(f"{str(one.record.values)[:23]:<24}{float(one.pga) / G:9.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
+    say(Path(files["table"]).read_text(encoding="utf-8").split("\n\n")[1])
+    say(uncertain_line(ds.least_scale_uncertain.values if sensitivity else None, ds.uncertain.values, "least factor(s)",
                               ds.least_scale.size))
-    typer.echo("wrote " + ", ".join(str(p) for p in files.values()))
+    say("wrote " + ", ".join(str(p) for p in files.values()))
+    import csv
+
+    def number(text):  # a fragility CSV cell: a number, else its text
+        try:
+            return float(text)
+        except ValueError:
+            return text
+
+    with open(files["fragility"], encoding="utf-8") as fh:
+        fragility = [{k: number(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+    report("suite", {"models": kinds, "records": [{"record": str(ds.record.values[r]), "pga": float(ds.pga[r]), "pgv": float(ds.pgv[r]),
+                                                    "d5_95": float(ds.d5_95[r])} for r in range(ds.sizes["record"])],
+                     "fragility": fragility,
+                     "status": _status_counts(ds.worst_status.values), "seconds": secs, "files": list(files.values())},
+           {"pga": "m/s2", "pgv": "m/s", "d5_95": "s", "seconds": "s"})
     _exit_if_untrusted(_status_counts(ds.worst_status.values), "column(s) × record(s)")
 
 
@@ -597,6 +671,7 @@ def calibrate(
     tan_alphas: Optional[str] = typer.Option(None, help="slenderness values to calibrate at ('0.1,0.2,0.3' or 'a:b:n'; default 0.05:0.35:13)"),
     max_iter: int = typer.Option(300, help="optimiser iterations at most"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
 ):
     """Calibrate the spring model's damper c̄ against the rigid model's η⁴ (paper eq. 17, figure 7)."""
@@ -617,8 +692,10 @@ def calibrate(
 
     t0 = time.perf_counter()
     rep = calibration_report(out, tan_alphas=ta, progress=not quiet, max_iter=max_iter)
-    typer.echo(rep.format_table())
-    typer.echo(f"{time.perf_counter() - t0:.1f} s; wrote " + ", ".join(str(p) for p in rep.files.values()))
+    say(rep.format_table())
+    seconds = time.perf_counter() - t0
+    say(f"{seconds:.1f} s; wrote " + ", ".join(str(p) for p in rep.files.values()))
+    report("calibrate", {"table": rep.table, "seconds": seconds, "files": list(rep.files.values())}, {"seconds": "s"})
     stuck = [f"{r['tan_alpha']:g}" for r in rep.table if not r["converged"]]
     if stuck:
         typer.echo(f"Warning: c̄ did not converge in --max-iter {max_iter} iterations at tanα = {', '.join(stuck)} "
@@ -656,6 +733,7 @@ def reproduce(
                              "figure and its data; findings/ keeps each finished step (a rerun resumes)"),
     only: Optional[str] = typer.Option(None, help="comma-separated steps to run (default all): " + ", ".join(_steps())),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
 ):
     """Reproduce the paper: every figure (3-17) into one folder and a report that sets each value the
@@ -673,9 +751,10 @@ def reproduce(
 
     rep = _in_folder(out, "report.md", "steps", "findings", lambda: run(out, quick=quick, only=names, progress=not quiet))
     counts = rep.counts()
-    typer.echo(f"{sum(counts.values())} values of the paper in {sum(rep.seconds.values()):.0f} s of computation: "
+    say(f"{sum(counts.values())} values of the paper in {sum(rep.seconds.values()):.0f} s of computation: "
                + ", ".join(f"{n} {v}" for v, n in counts.items()))
-    typer.echo("wrote " + ", ".join(str(p) for p in rep.files.values()))
+    say("wrote " + ", ".join(str(p) for p in rep.files.values()))
+    report("reproduce", {"verdicts": counts, "seconds": sum(rep.seconds.values()), "files": list(rep.files.values())}, {"seconds": "s"})
 
 
 @app.command()
@@ -685,6 +764,7 @@ def stability(
     out: Path = typer.Option(Path("out/stability"), help="output folder: stability.md, stability.csv, stability.png; "
                              "stability_cases/ keeps each finished case (a rerun resumes)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
 ):
     """The defaults of the three models (rigid, quasi-rigid SM, flexible SM) on stiff and extreme
@@ -696,11 +776,12 @@ def stability(
 
     rows = _in_folder(out, "stability.md", "cases", "stability_cases", lambda: run(out, quick=quick, progress=not quiet))
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
-    typer.echo(f"{len(rows)} runs: " + ", ".join(f"{n} {v}" for v, n in counts.items()))
+    say(f"{len(rows)} runs: " + ", ".join(f"{n} {v}" for v, n in counts.items()))
     for r in rows:
         if r["verdict"] != HOLDS:
-            typer.echo(f"  {r['case']} | {r['model']}: {r['verdict']} ({r['status']}, error {r['error']:.1e}, accuracy {r['accuracy']:.0e})")
-    typer.echo(f"wrote {out / 'stability.md'}, {out / 'stability.csv'}, {out / 'stability.png'}")
+            say(f"  {r['case']} | {r['model']}: {r['verdict']} ({r['status']}, error {r['error']:.1e}, accuracy {r['accuracy']:.0e})")
+    say(f"wrote {out / 'stability.md'}, {out / 'stability.csv'}, {out / 'stability.png'}")
+    report("stability", {"verdicts": counts, "runs": rows, "files": [out / "stability.md", out / "stability.csv", out / "stability.png"]})
     if counts[OFF] or counts[NOT_FINITE]:
         raise typer.Exit(EXIT_UNTRUSTED)
 
@@ -712,6 +793,7 @@ def work_precision(
     out: Path = typer.Option(Path("out/work-precision"), help="output folder: work_precision.png (the diagrams), .md (tables, the "
                              "defaults against the peers), .csv (every point); work_precision_panels/ keeps each finished panel"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
 ):
     """Error against run time for the RM (diffrax solvers over rtol, float32, the SciPy event loop)
@@ -722,10 +804,11 @@ def work_precision(
     from ..numerics.work_precision import work_precision as run
 
     rows = _in_folder(out, "work_precision.md", "panels", "work_precision_panels", lambda: run(out, quick=quick, progress=not quiet))
-    typer.echo(f"{len(rows)} points; the defaults against the peers:")
+    say(f"{len(rows)} points; the defaults against the peers:")
     for line in defaults_table(rows):
-        typer.echo(line)
-    typer.echo(f"wrote {out / 'work_precision.png'}, {out / 'work_precision.md'}, {out / 'work_precision.csv'}")
+        say(line)
+    say(f"wrote {out / 'work_precision.png'}, {out / 'work_precision.md'}, {out / 'work_precision.csv'}")
+    report("work-precision", {"points": rows, "files": [out / "work_precision.png", out / "work_precision.md", out / "work_precision.csv"]})
 
 
 def main():  # pragma: no cover

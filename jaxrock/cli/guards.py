@@ -182,6 +182,48 @@ def _hold(path, what: str) -> None:
 _NO_ROOM = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EACCES, errno.EPERM}
 
 
+JSON = False  # `--json`: the summary as one JSON document on stdout instead of text (set per command by `_guarded`)
+
+
+def say(text: str = "") -> None:
+    """A line of a command's text summary on stdout (none under `--json`: `report` prints the document)."""
+    if not JSON:
+        typer.echo(text)
+
+
+def plain(x):
+    """`x` as JSON can hold it: arrays and tuples as lists, NumPy scalars as numbers, paths as text,
+    non-finite numbers as null (a time or factor that never happened, a value not computed)."""
+    import math
+    from pathlib import PurePath
+
+    if isinstance(x, dict):
+        return {str(k): plain(v) for k, v in x.items()}
+    if isinstance(x, np.ndarray):
+        x = x.tolist()  # a 0-d array: its number
+    if isinstance(x, (list, tuple)):
+        return [plain(v) for v in x]
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    if isinstance(x, PurePath):
+        return str(x)
+    return x
+
+
+def report(command: str, data: dict, units: dict | None = None) -> None:
+    """Under `--json`: one JSON document on stdout, `{"command", "jaxrock", "units", ...data}`
+    (`units`: field → unit of the numbers that have one; `null` means never or not computed)."""
+    if JSON:
+        import json
+
+        from ..cache import package_version
+
+        doc = {"command": command, "jaxrock": package_version(), "units": units or {}, **data}
+        typer.echo(json.dumps(plain(doc), allow_nan=False, ensure_ascii=False, indent=1))
+
+
 def _guarded(fn):
     """A command: a `JaxrockInputError` becomes a one-line message and exit code 2; SIGINT and
     SIGTERM stop the run at its next safe point (`jaxrock.interrupt`) and exit 130 — a command
@@ -189,7 +231,7 @@ def _guarded(fn):
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
-        global _held
+        global _held, JSON
         from .._validate import MADE_FOLDERS, JaxrockInputError, remove_made_folders
         from ..interrupt import deferred_signals
 
@@ -197,6 +239,7 @@ def _guarded(fn):
 
         MADE_FOLDERS.clear()
         files.FORCE = bool(kwargs.get("force", False))  # the commands that write files take --force
+        JSON = bool(kwargs.get("as_json", False))  # the commands that print a summary take --json
         try:
             with deferred_signals(), contextlib.ExitStack() as _held:
                 return fn(*args, **kwargs)
@@ -215,5 +258,6 @@ def _guarded(fn):
             raise typer.Exit(EXIT_INTERRUPTED) from None
         finally:
             files.FORCE = False  # the library, called after, keeps its default
+            JSON = False
 
     return wrapper

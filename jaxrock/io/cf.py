@@ -82,10 +82,35 @@ def encode_never(values, attrs: dict, also: str = "") -> tuple[np.ndarray, dict]
     return np.where(np.isposinf(v), np.nan, v), {**attrs, "comment": NEVER + (f"; {also}" if also else "")}
 
 
+def flags(long_name: str, meanings, dtype=np.int8) -> dict:
+    """CF flag attributes: `flag_values` beside `flag_meanings` (and units 1)."""
+    return {"long_name": long_name, "units": "1", "flag_values": np.arange(len(meanings), dtype=dtype),
+            "flag_meanings": " ".join(meanings)}
+
+
+INVALID = "or the scene is invalid (status invalid_input)"
+
+
+def output_variable(o, values, dims) -> tuple:
+    """A summary output (`jaxrock.outputs.Output`) as a netCDF variable: flags as CF flags (int8,
+    "not_overturned overturned"), counts as int32 (netCDF-3 has no int64), a time's "never"
+    (+inf) as the fill value (`encode_never`), numbers as they are."""
+    values = np.asarray(values)
+    if o.kind == "bool":
+        return dims, values.astype(np.int8), {**flags(o.name, (f"not_{o.name}", o.name)), "long_name": o.meaning}
+    if o.units == "s":
+        return (dims, *encode_never(values, {"long_name": o.meaning, "units": o.units}, INVALID))
+    data = values.astype(np.int32) if o.kind == "int" else values
+    return dims, data, {"long_name": o.meaning, "units": o.units}
+
+
 def netcdf_encoding(ds) -> dict:
-    """`to_netcdf`'s encoding: no fill value on coordinates and scalar variables (CF 2.5.1), a
-    NaN fill on the other float variables."""
-    return {name: {"_FillValue": None} for name, v in ds.variables.items() if name in ds.coords or v.ndim == 0}
+    """`to_netcdf`'s encoding: no fill value on coordinates and on scalar variables that hold a
+    value (CF 2.5.1), a NaN fill on the other float variables."""
+    def filled(v):
+        return v.dtype.kind == "f" and bool(np.isnan(v.values).any())
+
+    return {name: {"_FillValue": None} for name, v in ds.variables.items() if name in ds.coords or (v.ndim == 0 and not filled(v))}
 
 
 def write_netcdf(ds, path) -> None:
