@@ -140,7 +140,7 @@ def test_unwritable_output_fails_before_the_work(tmp_path, monkeypatch, args, na
     scenes.write_text("height,tan_alpha,accel_ratio,omega_ratio\n10,0.2,3,4\n")
     runs = []
     monkeypatch.setattr(jr.model, "simulate", lambda *a, **k: runs.append(1))
-    monkeypatch.setattr("jaxrock.cli.commands._simulate", lambda *a, **k: runs.append(1))
+    monkeypatch.setattr("jaxrock.cli.simulate._simulate", lambda *a, **k: runs.append(1))
     r = invoke(*[a.format(blocked=blocked, scenes=scenes) for a in args])
     assert r.exit_code == 2, r.output
     assert f"{name} " in r.output and "a_file is a file, not a folder" in r.output

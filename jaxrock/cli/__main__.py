@@ -1,3 +1,3 @@
-from .commands import app
+from . import app
 
 app()
