@@ -72,7 +72,7 @@ def commands(work: Path) -> dict[str, list[str]]:
     return {
         "spectrum": ["spectrum", "-q", "--out", str(work / "spectrum")],
         "simulate": ["simulate", "--height", "10", "--tan-alpha", "0.2", "--a-p", "3", "--omega-p", "6"],
-        "batch": ["batch", str(work / "scenes.csv"), str(work / "results.csv"), "-q"],
+        "batch": ["batch", str(work / "scenes.csv"), "--out", str(work / "results.csv"), "-q"],
         "help": ["--help"],
         "refused": ["simulate", "--tan-alpha", "2"],
     }

@@ -130,9 +130,9 @@ def main() -> None:
             f"{r['rss_mb']:.0f} | {r['disk_per_scene']:.1f} |")
     out()
     args = ["sweep", "--height", "2,5,10,20", "--accel-ratio", f"0.5:10:{n}", "--omega-ratio", f"1:15:{n}", "-q"]
-    cold = command([*args, "--store", os.path.join(tmp, "cli-cold.zarr")], {"JAXROCK_CACHE_DIR": "off"}, tmp)
-    command([*args, "--store", os.path.join(tmp, "cli-warmup.zarr")], cache, tmp)
-    warm = command([*args, "--store", os.path.join(tmp, "cli-warm.zarr")], cache, tmp)
+    cold = command([*args, "--out", os.path.join(tmp, "cli-cold.zarr")], {"JAXROCK_CACHE_DIR": "off"}, tmp)
+    command([*args, "--out", os.path.join(tmp, "cli-warmup.zarr")], cache, tmp)
+    warm = command([*args, "--out", os.path.join(tmp, "cli-warm.zarr")], cache, tmp)
     out(f"whole command `jaxrock {' '.join(args)}`: cold (cache off) {cold:.1f} s, warm (cache filled) {warm:.1f} s")
     shutil.rmtree(tmp, ignore_errors=True)
     if not opts.quick:

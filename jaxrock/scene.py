@@ -64,6 +64,7 @@ class Param(NamedTuple):
     units: str = "1"
     neutral: float | None = None
     step: float | None = None
+    option: str = ""  # the command line's flag where the name's own would not be lower case (`E`: --youngs-modulus)
 
     @property
     def range_text(self) -> str:
@@ -104,8 +105,8 @@ class Param(NamedTuple):
 
     @property
     def flag(self) -> str:
-        """The command line's option ("--tan-alpha" for `tan_alpha`; "--E" for `E`)."""
-        return "--" + self.name.replace("_", "-")
+        """The command line's option ("--tan-alpha" for `tan_alpha`; `option` where given: "--youngs-modulus" for `E`)."""
+        return self.option or "--" + self.name.replace("_", "-")
 
 
 # the built-in models' parameters (paper: η eq. 5, c̄ eq. 17; the concrete column of sections 4–6)
@@ -113,7 +114,7 @@ ETA = Param("eta", "rigid impact velocity ratio (1: undamped)", "–", 0.0, 1.0,
             long_name="rigid impact velocity ratio", neutral=0.9)
 CBAR = Param("cbar", "spring-model damper c̄ (0: undamped)", "–", 0.0, math.inf, hi_open=True, default_text="eq. 17", undamped=0.0,
              long_name="spring-model damper cbar", neutral=0.05)
-E_COLUMN = Param("E", "Young's modulus of the column", "Pa", 0.0, math.inf, True, True, default=30e9, units="Pa")
+E_COLUMN = Param("E", "Young's modulus of the column", "Pa", 0.0, math.inf, True, True, default=30e9, units="Pa", option="--youngs-modulus")
 RHO_COLUMN = Param("rho", "density of the column", "kg/m³", 0.0, math.inf, True, True, default=2500.0, units="kg m-3")
 ZETA_COLUMN = Param("zeta", "column damping ratio, first fixed-base mode", "–", 0.0, math.inf, hi_open=True, default=0.01,
                     long_name="column damping ratio")
@@ -228,6 +229,15 @@ def register_pulse_kind(name: str, cls: str | Callable, parameters: tuple[Param,
         raise JaxrockInputError(f"pulse kind {name!r}: a lower-case name without commas")
     PULSES[name] = cls
     PULSE_PARAMS[name] = {p.name: p for p in parameters}
+
+
+def pulse_kind_of(cls_name: str) -> str:
+    """The pulse kind whose class is named `cls_name` ("RickerPulse" → "symmetric"); the name itself
+    where no kind has that class."""
+    for kind, cls in PULSES.items():
+        if (cls if isinstance(cls, str) else getattr(cls, "__name__", "")) == cls_name:
+            return kind
+    return cls_name
 
 
 N_CYCLES = Param("n_cycles", "cycles N of the sine pulse", "–", 0.5, 100.0, default=1.0, long_name="sine pulse cycles", step=0.5)

@@ -109,7 +109,7 @@ def _direct(row):
 def test_batch_round_trip_and_resume(tmp_path):
     scenes = write(tmp_path / "scenes.csv", SCENES)
     (tmp_path / "out").mkdir()
-    r = invoke("batch", scenes, tmp_path / "out", "--quiet")  # a folder: the results go inside it
+    r = invoke("batch", scenes, "--out", tmp_path / "out", "--quiet")  # a folder: the results go inside it
     assert r.exit_code == 0, r.output
     res = tmp_path / "out" / "scenes_results.csv"
     rows = read_csv(res)
@@ -130,7 +130,7 @@ def test_batch_round_trip_and_resume(tmp_path):
     kept = lines[2].split(",")
     kept[lines[0].split(",").index("max_theta")] = "0.123456"
     write(res, lines[0] + "\n" + ",".join(kept) + "\n" + "1,a,10")  # + a partly written line
-    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    r = invoke("batch", scenes, "--out", res, "--resume", "--quiet")
     assert r.exit_code == 0, r.output
     assert "1 skipped" in r.output and "2 run" in r.output
     again = read_csv(res)
@@ -146,7 +146,7 @@ def test_batch_round_trip_and_resume(tmp_path):
 
     # resuming against changed inputs is refused
     write(scenes, SCENES.replace("b,5,0.15", "b,6,0.15"))
-    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    r = invoke("batch", scenes, "--out", res, "--resume", "--quiet")
     assert r.exit_code == 2 and "row 2" in r.output
 
 
@@ -155,7 +155,7 @@ def test_batch_sensitivity_writes_each_rows_tangent_and_doubt(tmp_path):
     `uncertain` flag its own numbers'; the summary counts the uncertain rows. Without it the
     columns read NaN and 0 and the summary does not count them."""
     scenes = write(tmp_path / "scenes.csv", SCENES)
-    r = invoke("batch", scenes, tmp_path / "r.csv", "--quiet", "--sensitivity")
+    r = invoke("batch", scenes, "--out", tmp_path / "r.csv", "--quiet", "--sensitivity")
     assert r.exit_code == 0, r.output
     rows = read_csv(tmp_path / "r.csv")
     for x in rows:
@@ -169,7 +169,7 @@ def test_batch_sensitivity_writes_each_rows_tangent_and_doubt(tmp_path):
         assert float(x["sensitivity"]) == pytest.approx(float(sol.sensitivity), rel=1e-6)
         assert int(x["uncertain"]) == int(jr.verdict_uncertain(float(x["sensitivity"]), float(x["max_theta"]), bool(int(x["overturned"]))))
     assert f"verdict uncertain: {sum(int(x['uncertain']) for x in rows)}" in r.output, r.output
-    r = invoke("batch", scenes, tmp_path / "plain.csv", "--quiet")
+    r = invoke("batch", scenes, "--out", tmp_path / "plain.csv", "--quiet")
     assert r.exit_code == 0 and "verdict uncertain" not in r.output, r.output
     assert all(x["sensitivity"] == "nan" and x["uncertain"] == "0" for x in read_csv(tmp_path / "plain.csv"))
 
@@ -211,7 +211,7 @@ def test_batch_malformed_row_fails_before_running(tmp_path, bad, where):
     lines[2] = bad
     scenes = write(tmp_path / "scenes.csv", "\n".join(lines) + "\n")
     res = tmp_path / "results.csv"
-    r = invoke("batch", scenes, res, "--quiet")
+    r = invoke("batch", scenes, "--out", res, "--quiet")
     assert r.exit_code == 2, r.output
     for w in where:
         assert w in r.output, (w, r.output)
@@ -221,7 +221,7 @@ def test_batch_malformed_row_fails_before_running(tmp_path, bad, where):
 
 def test_batch_parameter_for_wrong_model(tmp_path):
     scenes = write(tmp_path / "s.csv", "height,tan_alpha,model,accel_ratio,omega_ratio,eta\n10,0.2,spring,3,2,0.5\n")
-    r = invoke("batch", scenes, tmp_path / "r.csv")
+    r = invoke("batch", scenes, "--out", tmp_path / "r.csv")
     assert r.exit_code == 2 and "'eta'" in r.output and "rigid" in r.output
 
 

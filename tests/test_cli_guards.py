@@ -38,8 +38,8 @@ def test_simulate_failed_status_exits_1_with_advice():
 
 def test_spectrum_failed_cells_exit_1_after_writing(tmp_path):
     out = tmp_path / "spec"
-    r = invoke("spectrum", "--model", "spring", "--tol", 1e-14, "--n-omega", 1, "--n-accel", 1, "--accel-min", 3,
-               "--omega-min", 2, "--refine", 0, "--out", out, "--quiet")
+    r = invoke("spectrum", "--model", "spring", "--tol", 1e-14, "--omega-ratio", 2, "--accel-ratio", 3,
+               "--refine", 0, "--out", out, "--quiet")
     assert r.exit_code == 1, r.output
     assert "1 cell(s) ended with status solver_failed" in r.output
     assert Spectrum.load(tmp_path / "spec.nc").status.ravel().tolist() == [int(jr.status_codes(jr.Status.solver_failed))]
@@ -55,7 +55,7 @@ def test_record_spectrum_failed_runs_exit_1_files_with_the_users_umask(tmp_path)
 
     old = os.umask(0o022)
     try:
-        r = invoke("record-spectrum", "--model", "spring", "--tol", 1e-14, "--heights", "2,4", "--scales", "0.5,1",
+        r = invoke("record-spectrum", "--model", "spring", "--tol", 1e-14, "--height", "2,4", "--scale", "0.5,1",
                    "--refine", 1, "--out", tmp_path / "rs", "--quiet", "--no-sensitivity")
     finally:
         os.umask(old)
@@ -73,7 +73,7 @@ def test_calibrate_not_converged_exits_1(tmp_path):
     """Two optimiser iterations cannot meet the calibration's stopping test: every slenderness is
     named on one line and the exit code is 1 (was 0, with converged=False only in the CSV).
     A real calibration (21–30 s): slow; the default run checks the decision on a given report."""
-    r = invoke("calibrate", "--tan-alphas", "0.1,0.2,0.3", "--max-iter", 2, "--out", tmp_path, "--quiet")
+    r = invoke("calibrate", "--tan-alpha", "0.1,0.2,0.3", "--max-iter", 2, "--out", tmp_path, "--quiet")
     assert r.exit_code == 1, r.output
     assert "did not converge in --max-iter 2 iterations at tanα = 0.1, 0.2, 0.3 (3 of 3)" in r.output
 
@@ -88,13 +88,13 @@ def test_spectrum_refuses_a_checkpoint_of_another_pulse(tmp_path):
     wr, ar = np.linspace(1.5, 6, 3), np.linspace(0.8, 6, 3)
     model = build_model("rigid", 10.0, 0.2)
     jr.overturning_spectrum(model, wr, ar, checkpoint=Path(f"{out}.checkpoint"), keep_checkpoint=True, progress=False)
-    r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
-               "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet", "--pulse", "antisymmetric")
+    r = invoke("spectrum", "--omega-ratio", "1.5:6:3", "--accel-ratio", "0.8:6:3",
+               "--out", out, "--quiet", "--pulse", "antisymmetric")
     assert r.exit_code == 2, r.output
     assert "excitation: RickerPulse → AntisymmetricRickerPulse" in r.output and "delete" in r.output
     assert len(r.output.strip().splitlines()) == 1
-    r = invoke("spectrum", "--n-omega", 3, "--n-accel", 3, "--omega-min", 1.5, "--omega-max", 6,
-               "--accel-min", 0.8, "--accel-max", 6, "--out", out, "--quiet")
+    r = invoke("spectrum", "--omega-ratio", "1.5:6:3", "--accel-ratio", "0.8:6:3",
+               "--out", out, "--quiet")
     assert r.exit_code == 0, r.output  # the run that made it resumes it
     assert not Path(f"{out}.checkpoint").exists() and Path(f"{out}.nc").exists()
 
@@ -115,7 +115,7 @@ def test_calibrate_names_the_slendernesses_that_did_not_converge(tmp_path, monke
 
     for converged, code in (((True, False, False), 1), ((True, True, True), 0)):
         monkeypatch.setattr(cal, "calibration_report", lambda *a, _c=converged, **k: Report(_c))
-        r = invoke("calibrate", "--tan-alphas", "0.1,0.2,0.3", "--max-iter", 5, "--out", tmp_path, "--quiet")
+        r = invoke("calibrate", "--tan-alpha", "0.1,0.2,0.3", "--max-iter", 5, "--out", tmp_path, "--quiet")
         assert r.exit_code == code, r.output
         assert ("did not converge in --max-iter 5 iterations at tanα = 0.2, 0.3 (2 of 3)" in r.output) == (code == 1)
 
@@ -126,7 +126,7 @@ def test_calibrate_names_the_slendernesses_that_did_not_converge(tmp_path, monke
     [
         (["spectrum", "--out", "{blocked}/spec"], "--out"),
         (["simulate", "--plot", "{blocked}/x.png"], "--plot"),
-        (["batch", "{scenes}", "{blocked}/r.csv"], "results"),
+        (["batch", "{scenes}", "--out", "{blocked}/r.csv"], "--out"),
         (["record-spectrum", "--out", "{blocked}/rs"], "--out"),
         (["calibrate", "--out", "{blocked}"], "--out"),
     ],
@@ -151,14 +151,14 @@ def test_unwritable_output_fails_before_the_work(tmp_path, monkeypatch, args, na
 def test_batch_binary_csv_is_one_line(tmp_path, content, needle):
     scenes = tmp_path / "scenes.csv"
     scenes.write_bytes(content)
-    r = invoke("batch", scenes, tmp_path / "r.csv")
+    r = invoke("batch", scenes, "--out", tmp_path / "r.csv")
     assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
 
 
 def test_calibrate_needs_three_slendernesses_before_computing(tmp_path):
     """Two values computed for 23 s, then failed in the power-law fit; now refused at once."""
     t0 = time.perf_counter()
-    r = invoke("calibrate", "--tan-alphas", "0.15,0.25", "--out", tmp_path)
+    r = invoke("calibrate", "--tan-alpha", "0.15,0.25", "--out", tmp_path)
     assert r.exit_code == 2 and "needs at least 3" in r.output, r.output
     assert time.perf_counter() - t0 < 2.0
 
@@ -187,11 +187,11 @@ def test_huge_grid_is_refused_with_an_estimate_unless_yes():
     """10⁴ × 10⁴ cells showed an ETA of 41–124 h and took 5 GB: now one line with the estimate
     (from the measured cost per cell) and exit 2, before anything is allocated or compiled."""
     t0 = time.perf_counter()
-    r = invoke("spectrum", "--n-omega", 10_000, "--n-accel", 10_000)
+    r = invoke("spectrum", "--omega-ratio", "1:15:10000", "--accel-ratio", "0.5:10:10000")
     assert r.exit_code == 2, r.output
     assert "100,000,000 cells: about 5.3 h and 6.4 GB (at 0.19 ms each" in r.output and "--yes" in r.output
     assert len(r.output.strip().splitlines()) == 1 and time.perf_counter() - t0 < 2.0
-    r = invoke("spectrum", "--n-omega", 10_000, "--n-accel", 10_000, "--sensitivity")  # each run with its tangent: dearer
+    r = invoke("spectrum", "--omega-ratio", "1:15:10000", "--accel-ratio", "0.5:10:10000", "--sensitivity")  # each run with its tangent: dearer
     assert r.exit_code == 2 and "100,000,000 cells: about 10.6 h and 6.4 GB (at 0.38 ms each" in r.output, r.output
     # the gate itself: --yes lets the same work through; a flexible grid is dearer per cell
     from jaxrock.cli.guards import _estimate
@@ -204,12 +204,12 @@ def test_huge_grid_is_refused_with_an_estimate_unless_yes():
 
 
 def test_huge_list_option_is_refused():
-    r = invoke("record-spectrum", "--heights", "1:2:100000000")
+    r = invoke("record-spectrum", "--height", "1:2:100000000")
     assert r.exit_code == 2 and "n = 100000000 values; valid: at most 100000" in r.output, r.output
 
 
 def test_huge_record_sweep_is_refused_with_an_estimate():
-    r = invoke("record-spectrum", "--heights", "1:20:10000")
+    r = invoke("record-spectrum", "--height", "1:20:10000")
     assert r.exit_code == 2 and "240,000 record runs: about" in r.output and "--yes" in r.output, r.output
 
 
@@ -224,21 +224,21 @@ def test_batch_resume_refuses_results_of_another_record_or_version(tmp_path, mon
     rec.write_text("".join(f"{x:.17g} {0.3 * np.sin(3 * x):.17g}\n" for x in t))
     scenes = write(tmp_path / "scenes.csv", "height,tan_alpha,pulse,scale\n10,0.2,rec.txt,1\n5,0.2,rec.txt,2\n")
     res = tmp_path / "results.csv"
-    r = invoke("batch", scenes, res, "--quiet")
+    r = invoke("batch", scenes, "--out", res, "--quiet")
     assert r.exit_code == 0, r.output
     assert (tmp_path / "results.csv.made_by.json").is_file()
-    assert invoke("batch", scenes, res, "--resume", "--quiet").exit_code == 0  # same run: resumes
+    assert invoke("batch", scenes, "--out", res, "--resume", "--quiet").exit_code == 0  # same run: resumes
     rec.write_text("".join(f"{x:.17g} {0.4 * np.sin(3 * x):.17g}\n" for x in t))
-    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    r = invoke("batch", scenes, "--out", res, "--resume", "--quiet")
     assert r.exit_code == 2 and "made by a different run (record rec.txt:" in r.output, r.output
     assert len(r.output.strip().splitlines()) == 1
     rec.write_text("".join(f"{x:.17g} {0.3 * np.sin(3 * x):.17g}\n" for x in t))
     version = provenance.package_version()
     monkeypatch.setattr(provenance, "package_version", lambda: "9.9.9")
-    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    r = invoke("batch", scenes, "--out", res, "--resume", "--quiet")
     assert r.exit_code == 2 and f"jaxrock: {version} → 9.9.9" in r.output, r.output
     (tmp_path / "results.csv.made_by.json").unlink()
-    r = invoke("batch", scenes, res, "--resume", "--quiet")
+    r = invoke("batch", scenes, "--out", res, "--resume", "--quiet")
     assert r.exit_code == 2 and "is not the results of a batch run (no results.csv.made_by.json beside it)" in r.output, r.output
 
 
@@ -248,7 +248,7 @@ def test_results_file_that_is_a_hard_link_to_the_scenes_is_refused(tmp_path):
     scenes = write(tmp_path / "scenes.csv", "height,tan_alpha,accel_ratio,omega_ratio\n5,0.2,2,3\n")
     os.link(scenes, tmp_path / "results.csv")
     before = scenes.read_bytes()
-    r = invoke("batch", scenes, tmp_path / "results.csv")
+    r = invoke("batch", scenes, "--out", tmp_path / "results.csv")
     assert r.exit_code == 2 and "the results file is the scenes file" in r.output and len(r.output.splitlines()) == 1, r.output
     assert scenes.read_bytes() == before
 
@@ -286,13 +286,13 @@ def test_lock_of_a_dead_run_is_taken_over_and_released(tmp_path):
 @pytest.mark.parametrize(
     "args, needle",
     [
-        (["record-spectrum", "--heights", "1,,3"], "--heights = '1,,3' has an empty item"),
+        (["record-spectrum", "--height", "1,,3"], "--height = '1,,3' has an empty item"),
         (["simulate", "--t-free", "-1"], "--t-free applies to the time history"),
         (["simulate", "--plot", "h.png", "--n-points", "0"], "--n-points = 0; valid: an integer in [2, 1,000,000]"),
         (["simulate", "--plot", "h.png", "--t-free", "-1"], "--t-free = -1 is outside the valid range"),
-        (["simulate", "--tan-alpha", "1e-8"], "tan_alpha = 1e-08 is outside the valid range [0.001, 1)"),
-        (["simulate", "--model", "spring-flexible", "--E", "1e-3"], "E (Young's modulus) [Pa] = 0.001 is outside"),
-        (["simulate", "--model", "spring-flexible", "--rho", "1e12"], "rho (density) [kg/m^3] = 1e+12 is outside"),
+        (["simulate", "--tan-alpha", "1e-8"], "--tan-alpha = 1e-08 is outside the valid range [0.001, 1)"),
+        (["simulate", "--model", "spring-flexible", "--youngs-modulus", "1e-3"], "--youngs-modulus (Young's modulus) [Pa] = 0.001 is outside"),
+        (["simulate", "--model", "spring-flexible", "--rho", "1e12"], "--rho (density) [kg/m^3] = 1e+12 is outside"),
     ],
 )
 def test_typos_and_out_of_range_values_are_refused_before_the_work(tmp_path, monkeypatch, args, needle):
@@ -309,7 +309,7 @@ def test_typos_and_out_of_range_values_are_refused_before_the_work(tmp_path, mon
 def test_misspelt_batch_column_is_refused_naming_the_close_match(tmp_path):
     """`modle=spring` was copied through and the row ran the rigid model."""
     scenes = write(tmp_path / "scenes.csv", "id,height,tan_alpha,modle,accel_ratio,omega_ratio\na,10,0.2,spring,3,2\n")
-    r = invoke("batch", scenes, tmp_path / "res.csv")
+    r = invoke("batch", scenes, "--out", tmp_path / "res.csv")
     assert r.exit_code == 2 and "unknown column 'modle'; did you mean 'model'?" in r.output, r.output
     assert not (tmp_path / "res.csv").exists()
 

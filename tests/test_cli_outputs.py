@@ -14,7 +14,7 @@ import pytest
 import xarray as xr
 
 from jaxrock.analyses.spectra import Spectrum
-from jaxrock.outputs import HISTORY_FIELDS, OUTPUTS
+from jaxrock.outputs import HISTORY_FIELDS
 from helpers import invoke, read_csv
 
 
@@ -27,8 +27,8 @@ def _doc(r) -> dict:
 def test_spectrum_json_agrees_with_its_netcdf(tmp_path):
     """`spectrum --json`: one JSON document (strict: no NaN or Infinity) whose counts, boundaries
     and grid are the netCDF file's; null where a boundary is not in the grid."""
-    r = invoke("spectrum", "--n-omega", 4, "--n-accel", 5, "--omega-min", 1.5, "--omega-max", 9, "--accel-min", 0.5,
-               "--accel-max", 8, "--refine", 3, "--out", tmp_path / "s", "--quiet", "--json")
+    r = invoke("spectrum", "--omega-ratio", "1.5:9:4", "--accel-ratio", "0.5:8:5",
+               "--refine", 3, "--out", tmp_path / "s", "--quiet", "--json")
     doc = _doc(r)
     assert doc["command"] == "spectrum" and doc["units"]["height"] == "m" and doc["units"]["p"] == "rad/s"
     spec = Spectrum.load(tmp_path / "s.nc")
@@ -83,14 +83,14 @@ def test_simulate_save_refuses_an_unknown_suffix(tmp_path):
     assert r.exit_code == 2 and "--save" in r.output and ".nc" in r.output and ".csv" in r.output
 
 
-@pytest.mark.parametrize("args", [("record-spectrum", "--heights", "2,4", "--scales", "0.5,1", "--refine", 1, "--no-sensitivity"),
+@pytest.mark.parametrize("args", [("record-spectrum", "--height", "2,4", "--scale", "0.5,1", "--refine", 1, "--no-sensitivity"),
                                   ("batch",)])
 def test_json_documents_of_other_commands(tmp_path, args):
     """record-spectrum and batch: strict JSON with their results (a least factor per height; the
     rows run and their status counts)."""
     if args[0] == "batch":
         (tmp_path / "scenes.csv").write_text("height,tan_alpha,accel_ratio,omega_ratio\n4,0.2,3,4\n10,0.15,6,2\n")
-        r = invoke("batch", tmp_path / "scenes.csv", tmp_path / "res.csv", "--quiet", "--json")
+        r = invoke("batch", tmp_path / "scenes.csv", "--out", tmp_path / "res.csv", "--quiet", "--json")
         doc = _doc(r)
         assert doc["rows"] == doc["run"] == 2 and sum(doc["status"].values()) == 2
         return

@@ -25,7 +25,7 @@ def test_batch_does_not_write_through_a_symlink(tmp_path):
     scenes = write(tmp_path / "b.csv", SCENES)
     target = write(tmp_path / "target.csv", "precious\n")
     (tmp_path / "link.csv").symlink_to(target)
-    r = invoke("batch", scenes, tmp_path / "link.csv", "--quiet")
+    r = invoke("batch", scenes, "--out", tmp_path / "link.csv", "--quiet")
     assert r.exit_code == 2 and "is a symbolic link" in r.output and len(r.output.strip().splitlines()) == 1, r.output
     assert target.read_text() == "precious\n" and (tmp_path / "link.csv").is_symlink()
 
@@ -35,13 +35,13 @@ def test_batch_does_not_overwrite_an_unrelated_file_without_force(tmp_path):
     (with its description beside it) is still rewritten by a rerun, and --force overwrites."""
     scenes = write(tmp_path / "b.csv", SCENES)
     precious = write(tmp_path / "precious.csv", "keep me\n")
-    r = invoke("batch", scenes, precious, "--quiet")
+    r = invoke("batch", scenes, "--out", precious, "--quiet")
     assert r.exit_code == 2 and "exists and is not the results of a batch run" in r.output and "--force" in r.output, r.output
     assert precious.read_text() == "keep me\n"
-    r = invoke("batch", scenes, precious, "--quiet", "--force")
+    r = invoke("batch", scenes, "--out", precious, "--quiet", "--force")
     assert r.exit_code == 0, r.output
     assert precious.read_text().startswith("row,height")
-    r = invoke("batch", scenes, precious, "--quiet")  # now a results file of batch: a rerun rewrites it
+    r = invoke("batch", scenes, "--out", precious, "--quiet")  # now a results file of batch: a rerun rewrites it
     assert r.exit_code == 0, r.output
 
 
@@ -50,7 +50,7 @@ def test_batch_refuses_a_device_as_its_results(tmp_path, device):
     """`batch b.csv /dev/full` was a traceback (ENOSPC), `/dev/null` created /dev/null.made_by.json."""
     scenes = write(tmp_path / "b.csv", SCENES)
     existed = os.path.exists(device + ".made_by.json")
-    r = invoke("batch", scenes, device, "--quiet")
+    r = invoke("batch", scenes, "--out", device, "--quiet")
     assert r.exit_code == 2 and "is not a regular file" in r.output and len(r.output.strip().splitlines()) == 1, r.output
     assert os.path.exists(device + ".made_by.json") == existed
 
@@ -80,9 +80,9 @@ def test_outputs_keep_the_users_umask(tmp_path, umask):
 
 
 def test_calibrate_refuses_a_slenderness_refused_everywhere_else(tmp_path):
-    """`calibrate --tan-alphas 0.0005,0.1,0.2` was accepted (and printed as 0.001)."""
-    r = invoke("calibrate", "--tan-alphas", "0.0005,0.1,0.2", "--out", tmp_path)
-    assert r.exit_code == 2 and "--tan-alphas" in r.output and "0.001" in r.output, r.output
+    """`calibrate --tan-alpha 0.0005,0.1,0.2` was accepted (and printed as 0.001)."""
+    r = invoke("calibrate", "--tan-alpha", "0.0005,0.1,0.2", "--out", tmp_path)
+    assert r.exit_code == 2 and "--tan-alpha" in r.output and "0.001" in r.output, r.output
     assert len(r.output.strip().splitlines()) == 1
 
 
@@ -169,19 +169,19 @@ def test_a_full_disk_is_one_line_and_leaves_no_temporary(tmp_path, monkeypatch, 
     monkeypatch.chdir(tmp_path)
     if where == "batch results":
         monkeypatch.setattr(scenes, "append_results", _no_room)
-        r = invoke("batch", write(tmp_path / "b.csv", SCENES), tmp_path / "r.csv", "-q")
+        r = invoke("batch", write(tmp_path / "b.csv", SCENES), "--out", tmp_path / "r.csv", "-q")
     elif where == "spectrum netCDF":
         def partial(self, path, **kw):
             open(path, "wb").write(b"CDF\x01")
             _no_room()
         monkeypatch.setattr(xr.Dataset, "to_netcdf", partial)
-        r = invoke("spectrum", "--n-omega", 2, "--n-accel", 2, "--refine", 0, "--out", tmp_path / "spec", "-q")
+        r = invoke("spectrum", "--omega-ratio", "1:15:2", "--accel-ratio", "0.5:10:2", "--refine", 0, "--out", tmp_path / "spec", "-q")
     else:
         def half(tmp, sweep, history):
             tmp.mkdir()
             _no_room()
         monkeypatch.setattr(store, "_make", half)
-        r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--store", tmp_path / "s.zarr", "-q")
+        r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--out", tmp_path / "s.zarr", "-q")
     assert r.exit_code == 2 and "cannot write" in r.output and "No space left on device" in r.output, r.output
     assert len(r.output.strip().splitlines()) == 1, r.output
     assert not [p.name for p in tmp_path.rglob("tmp_*")]
@@ -259,7 +259,7 @@ def test_outputs_replace_only_files_jaxrock_wrote(tmp_path):
     figure names jaxrock in its first bytes; a CSV or a report starts as the new one will), never
     an unrelated file without --force, never through a symbolic link."""
     notes = write(tmp_path / "spec.nc", "my notes\n")
-    args = ["spectrum", "--n-omega", 2, "--n-accel", 2, "--refine", 0, "--out", tmp_path / "spec", "-q"]
+    args = ["spectrum", "--omega-ratio", "1:15:2", "--accel-ratio", "0.5:10:2", "--refine", 0, "--out", tmp_path / "spec", "-q"]
     r = invoke(*args)
     assert r.exit_code == 2 and "spec.nc: exists and was not written by jaxrock; pass --force" in r.output, r.output
     assert notes.read_text() == "my notes\n" and not (tmp_path / "spec.checkpoint").exists()

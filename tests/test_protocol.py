@@ -326,7 +326,7 @@ def test_a_plugin_kind_and_its_own_parameter_reach_every_entry_point(oscillator_
     assert bool(jr.simulate(osc(threshold=0.5), pulse(0.4, 1)).overturned) and not bool(jr.simulate(osc(), pulse(0.4, 1)).overturned)
     # jaxrock sweep over the plugin's parameter: a store whose every scene is simulate's
     r = _jaxrock(tmp, "sweep", "--model", "oscillator", "--threshold", "0.2,0.5", "--accel-ratio", "0.1,0.4", "--omega-ratio", "1",
-                 "--store", "s.zarr", "-q")
+                 "--out", "s.zarr", "-q")
     assert r.returncode == 0, r.stderr
     import xarray as xr
 
@@ -337,8 +337,8 @@ def test_a_plugin_kind_and_its_own_parameter_reach_every_entry_point(oscillator_
             got = float(ds.max_theta.sel(threshold=th, accel_ratio=a).squeeze())
             assert abs(got - float(jr.simulate(osc(threshold=th), pulse(a, 1)).max_theta)) <= 1e-12
     # jaxrock spectrum: a grid of cells, each simulate's
-    r = _jaxrock(tmp, "spectrum", "--model", "oscillator", "--threshold", "0.5", "--n-omega", "2", "--omega-max", "3", "--n-accel", "2",
-                 "--accel-max", "2", "--refine", "0", "--out", "sp", "-q")
+    r = _jaxrock(tmp, "spectrum", "--model", "oscillator", "--threshold", "0.5", "--omega-ratio", "1:3:2", "--accel-ratio",
+                 "0.5:2:2", "--refine", "0", "--out", "sp", "-q")
     assert r.returncode == 0, r.stderr
     sp = xr.open_dataset(tmp / "sp.nc")
     for a in sp.accel_ratio.values:
@@ -355,7 +355,7 @@ def test_a_plugin_kind_and_its_own_parameter_reach_every_entry_point(oscillator_
     # refused in one line, exit 2: its flag on another kind, its own range, a plugin that is not there
     for args, plugins, says in ((("simulate", "--threshold", "0.5"), "oscillator_plugin", "--threshold applies to --model oscillator only, not rigid"),
                                 (("simulate", "--model", "oscillator", "--threshold", "0"), "oscillator_plugin", r"threshold = 0 .*\(0, 10\]"),
-                                (("sweep", "--model", "oscillator", "--zeta", "3", "--accel-ratio", "1", "--omega-ratio", "1", "--store", "z.zarr"),
+                                (("sweep", "--model", "oscillator", "--zeta", "3", "--accel-ratio", "1", "--omega-ratio", "1", "--out", "z.zarr"),
                                  "oscillator_plugin", r"zeta = 3 .*\[0, 2\]"),
                                 (("simulate", "--help"), "no_such_plugin", "JAXROCK_PLUGINS module 'no_such_plugin' could not be loaded")):
         r = _jaxrock(tmp, *args, plugins=plugins)

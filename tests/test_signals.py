@@ -16,7 +16,7 @@ from helpers import jaxrock_process as _jaxrock
 
 
 def _spectrum_args(out):
-    return ["spectrum", "--n-omega", 4, "--n-accel", 4, "--batch-size", 4, "--refine", 3, "--out", out]
+    return ["spectrum", "--omega-ratio", "1:15:4", "--accel-ratio", "0.5:10:4", "--batch-size", 4, "--refine", 3, "--out", out]
 
 
 def _interrupt(args, cwd, pattern, sig=signal.SIGINT):
@@ -70,12 +70,12 @@ def test_sigterm_mid_batch_keeps_finished_rows_and_resume_completes_them(tmp_pat
     wrote, names the command with --resume, and the resumed run writes every row once, in order."""
     rows = ["height,tan_alpha,accel_ratio,omega_ratio"] + [f"{2 + i % 5},0.2,{1.5 + 0.1 * i},{2 + i % 7}" for i in range(48)]
     (tmp_path / "scenes.csv").write_text("\n".join(rows) + "\n")
-    args = ["batch", "scenes.csv", "results.csv", "--chunk-size", 8]
+    args = ["batch", "scenes.csv", "--out", "results.csv", "--chunk-size", 8]
     rc, _, err = _interrupt(args, tmp_path, r"8/48", signal.SIGTERM)
     assert rc == 130, err[-2000:]
     kept = int(re.search(r"interrupted: (\d+) rows kept in results.csv", err).group(1))
     assert 8 <= kept < 48 and kept % 8 == 0
-    assert "resume with: jaxrock batch scenes.csv results.csv --chunk-size 8 --resume" in err
+    assert "resume with: jaxrock batch scenes.csv --out results.csv --chunk-size 8 --resume" in err
     rc, stdout, err = _Watch(_jaxrock(*args, "--resume", cwd=tmp_path)).finish()
     assert rc == 0, err[-2000:]
     assert f"{48 - kept} run in 1 group(s), {kept} skipped" in stdout

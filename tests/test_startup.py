@@ -40,9 +40,9 @@ CLI = """
     (["spectrum", "--help"], 0),
     (["simulate", "--tan-alpha", "2"], 2),  # jaxrock's own range check
     (["simulate", "--height", "-1"], 2),
-    (["spectrum", "--n-omega", "0"], 2),
+    (["spectrum", "--omega-ratio", "1:15:0"], 2),
     (["simulate", "--model", "concrete"], 2),  # click's choice check
-    (["spectrum", "--accel-min", "abc"], 2),  # click's type check
+    (["spectrum", "--accel-ratio", "abc"], 2),  # not a number
 ])
 def test_help_and_refused_arguments_import_no_jax(args, code):
     """`--help` and a refused argument end (exit 0 / 2) without importing JAX or the other heavy

@@ -101,19 +101,19 @@ def test_record_sweep_over_sizes_matches_single_runs():
 
 def test_sweep_refuses_bad_values_in_one_line(tmp_path):
     for args, words in (
-        (["--tan-alpha", "0.2,1.5"], "tan_alpha"),
+        (["--tan-alpha", "0.2,1.5"], "--tan-alpha = 1.5"),
         (["--eta", "0.5"], "--eta applies to --model rigid"),  # fine for rigid: no error expected below
         (["--model", "spring", "--eta", "0.5"], "--eta applies to --model rigid only"),
         (["--scale", "2"], "--scale applies to record sweeps"),
-        (["--records", str(tmp_path)], "holds no record file"),
-        (["--accel-ratio", "0,1"], "accel_ratio"),
+        (["--record", str(tmp_path)], "holds no record file"),
+        (["--accel-ratio", "0,1"], "--accel-ratio"),
         (["--height", "5", "--tan-alpha", "0.3", "--tan-alpha-base", "0.2"], "tan_alpha_base"),
-        (["--model", "spring-flexible", "--E", "1e3,3e10"], "E (Young's modulus) [Pa] = 1000 is outside the valid range [1e+06, 1e+15]"),
+        (["--model", "spring-flexible", "--youngs-modulus", "1e3,3e10"], "--youngs-modulus (Young's modulus) [Pa] = 1000 is outside the valid range [1e+06, 1e+15]"),
         (["--scheduler", "-q"], "--scheduler '-q': not a scheduler address"),  # a flag taken for the address
     ):
         if args == ["--eta", "0.5"]:
             continue
-        r = invoke("sweep", *args, "--store", str(tmp_path / "x.zarr"))
+        r = invoke("sweep", *args, "--out", str(tmp_path / "x.zarr"))
         assert r.exit_code == 2, (args, r.output)
         assert words in r.output and len(r.output.strip().splitlines()) == 1, r.output
     assert not (tmp_path / "x.zarr").exists()
@@ -136,10 +136,10 @@ def test_killed_sweep_resumes_to_the_same_bits(tmp_path, sig):
     next chunk, exit 130 and the resume command; SIGKILL: at once), then rerun with the same
     command: the store equals an uninterrupted run's, bit for bit."""
     whole = tmp_path / "whole.zarr"
-    rc = _finish(jaxrock_process(*KILL_SWEEP, "--store", whole, cwd=tmp_path))
+    rc = _finish(jaxrock_process(*KILL_SWEEP, "--out", whole, cwd=tmp_path))
     assert rc == 0
     cut = tmp_path / "cut.zarr"
-    w = Watch(jaxrock_process(*KILL_SWEEP[:-1], "--store", cut, cwd=tmp_path))  # with its progress bar, to see it run
+    w = Watch(jaxrock_process(*KILL_SWEEP[:-1], "--out", cut, cwd=tmp_path))  # with its progress bar, to see it run
     w.wait_for(r"\b([2-9]|1[0-9])/144")
     w.proc.send_signal(sig)
     rc, out, err = w.finish()
@@ -149,7 +149,7 @@ def test_killed_sweep_resumes_to_the_same_bits(tmp_path, sig):
         assert rc == 130 and f"interrupted: {kept} of 144 chunks kept in" in err and "resume with: jaxrock sweep" in err
     else:
         assert rc == -signal.SIGKILL
-    rc = _finish(jaxrock_process(*KILL_SWEEP, "--store", cut, cwd=tmp_path))
+    rc = _finish(jaxrock_process(*KILL_SWEEP, "--out", cut, cwd=tmp_path))
     assert rc == 0
     a, b = xr.open_zarr(whole, chunks=None), xr.open_zarr(cut, chunks=None)
     _same(a, b)
@@ -158,13 +158,13 @@ def test_killed_sweep_resumes_to_the_same_bits(tmp_path, sig):
 
 def test_store_of_another_sweep_or_garbled_is_refused(tmp_path):
     store = tmp_path / "s.zarr"
-    r = invoke(*SWEEP, "--store", str(store))
+    r = invoke(*SWEEP, "--out", str(store))
     assert r.exit_code == 0, r.output
-    r = invoke(*SWEEP, "--tan-alpha", "0.25", "--store", str(store))
+    r = invoke(*SWEEP, "--tan-alpha", "0.25", "--out", str(store))
     assert r.exit_code == 2 and "was made by a different run (fixed tan_alpha: 0.2 → 0.25, model.block.b: 1. → 1.25" in r.output, r.output
     assert len(r.output.strip().splitlines()) == 1
     (store / "zarr.json").write_text("{ not json")
-    r = invoke(*SWEEP, "--store", str(store))
+    r = invoke(*SWEEP, "--out", str(store))
     assert r.exit_code == 2 and "is unreadable or not a jaxrock sweep" in r.output and len(r.output.strip().splitlines()) == 1
 
 
@@ -179,7 +179,7 @@ def test_a_damaged_store_is_named_and_its_chunk_run_again(tmp_path, damage):
     damaged chunk is named with its variable and file, run again and counted as run, and the store
     ends equal to the undamaged one bit for bit."""
     store = tmp_path / "s.zarr"
-    r = invoke(*DAMAGE_SWEEP, "--store", store)
+    r = invoke(*DAMAGE_SWEEP, "--out", store)
     assert r.exit_code == 0, r.output
     whole = xr.open_zarr(store, chunks=None).load()
     what = damage.split()[-1]
@@ -191,14 +191,14 @@ def test_a_damaged_store_is_named_and_its_chunk_run_again(tmp_path, damage):
         chunk_file.write_bytes(bytes(data))
     else:
         chunk_file.unlink()
-    r = invoke(*DAMAGE_SWEEP, "--store", store)
+    r = invoke(*DAMAGE_SWEEP, "--out", store)
     assert r.exit_code == 0, r.output
     assert "8 run in" in r.output and "(24 were in the store already)" in r.output, r.output
     if what != "flag":
         key = chunk_file.relative_to(store).as_posix()
         assert f"chunk 1 is damaged ({what}: chunk file {key} is " in r.output, r.output
     _same(xr.open_zarr(store, chunks=None).load(), whole)
-    r = invoke(*DAMAGE_SWEEP, "--store", store)
+    r = invoke(*DAMAGE_SWEEP, "--out", store)
     assert "0 run in" in r.output and "is damaged" not in r.output, r.output
 
 
@@ -258,7 +258,7 @@ def test_dask_cluster_writes_the_same_store_even_when_a_worker_is_killed(tmp_pat
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster, \
             distributed.Client(cluster, set_as_default=False) as client:
         r = invoke("sweep", "--height", "3,9", "--accel-ratio", "0.8:8:4", "--omega-ratio", "1:12:4", "--chunk-size", "4", "-q",
-                   "--store", str(tmp_path / "cluster.zarr"), "--scheduler", cluster.scheduler_address)
+                   "--out", str(tmp_path / "cluster.zarr"), "--scheduler", cluster.scheduler_address)
         assert r.exit_code == 0 and f"on Dask cluster {cluster.scheduler_address}" in r.output, r.output
         there = xr.open_zarr(tmp_path / "cluster.zarr", chunks=None)
         _same(here, there)
@@ -280,9 +280,9 @@ def test_dask_cluster_writes_the_same_store_even_when_a_worker_is_killed(tmp_pat
 
 @pytest.mark.parametrize("given", ["", ".", ".."])
 def test_store_naming_no_folder_of_its_own_is_refused(tmp_path, monkeypatch, given):
-    """Issue 52: `--store ""` and `--store .` were tracebacks (Path('.').with_name)."""
+    """Issue 52: `--store ""` and `--store .` (now --out) were tracebacks (Path('.').with_name)."""
     monkeypatch.chdir(tmp_path)
-    r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--store", given, "-q")
+    r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--out", given, "-q")
     assert r.exit_code == 2 and "names the current or a parent folder, not a store" in r.output, r.output
     assert len(r.output.strip().splitlines()) == 1 and not list(tmp_path.iterdir())
 
@@ -294,7 +294,7 @@ def test_scheduler_that_is_no_address_or_answers_nothing_is_one_line(tmp_path, a
     `Client.__del__` traceback after a 20 s close timeout. The address is now checked and probed
     before any Dask client exists: one line, exit 2, within seconds, no store made."""
     pytest.importorskip("distributed")
-    r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--store", tmp_path / "s.zarr", "-q", "--scheduler", address)
+    r = invoke("sweep", "--accel-ratio", "1:8:2", "--omega-ratio", "2:10:2", "--out", tmp_path / "s.zarr", "-q", "--scheduler", address)
     assert r.exit_code == 2 and needle in r.output and len(r.output.strip().splitlines()) == 1, r.output
     assert not (tmp_path / "s.zarr").exists()
 

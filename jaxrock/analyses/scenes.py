@@ -1,4 +1,4 @@
-"""Running a scenes file (`jaxrock batch scenes.csv results.csv`, `run_scenes`): the checked rows
+"""Running a scenes file (`jaxrock batch scenes.csv --out results.csv`, `run_scenes`): the checked rows
 (`jaxrock.io.scenes_file`, which documents both files) grouped by structure, each group stacked and
 run by the batch engine (`jaxrock.analyses.engine`) in chunks of `chunk_size` rows padded to a power
 of two ≥ 8 (few compiled shapes), the results appended per chunk (an interrupted run keeps its

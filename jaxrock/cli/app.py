@@ -19,6 +19,8 @@ BACKBONE_DEFAULTS = ", ".join(f"{v} {k}" for k, v in DEFAULT_BACKBONE.items())
 SMOOTHING_DEFAULTS = ", ".join(f"{v:g} {k}" for k, v in DEFAULT_SMOOTHING.items())
 UNDAMPED_HELP = "no energy loss: " + ", ".join(f"{k} = {v:g}" for k, v in UNDAMPED.items()) + " (whichever the model takes)"
 
+TOL_HELP = ("spring models: run generalized-α at this local tolerance, in (0, 0.1), its global error checked by a companion run at "
+            "10x the tolerance (status inaccurate beyond 1e-2 in max θ/α); default: the model's default integrator")
 RATIO_UNITS = {"omega_ratio": "1 (omega_p/p')", "accel_ratio": "1 (a_p/(g tan alpha'))"}  # --json: the grid's axes
 
 app = typer.Typer(

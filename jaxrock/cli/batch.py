@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Optional
 
 import typer
 
@@ -21,7 +22,9 @@ from .app import app, FORCE_OPTION, JSON_OPTION
 @_guarded
 def batch(
     scenes: Path = typer.Argument(..., help="scenes CSV (one scene per row; see `jaxrock.io.scenes_file`)"),
-    results: str = typer.Argument(..., help="results CSV to write (a folder, or a path ending in /: <folder>/<scenes stem>_results.csv)"),
+    results: Optional[str] = typer.Argument(None, help="deprecated: give --out", show_default=False, hidden=True),
+    out: Optional[str] = typer.Option(None, help="results CSV to write (a folder, or a path ending in /: <folder>/<scenes stem>_results.csv; "
+                                      "default out/<scenes stem>_results.csv)"),
     resume: bool = typer.Option(False, "--resume", help="skip rows already in the results file"),
     chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
@@ -29,11 +32,16 @@ def batch(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     as_json: bool = JSON_OPTION,
 ):
-    from .._validate import check_writable
+    from .._validate import JaxrockInputError, check_writable
     from ..io.results_file import count_results, results_path_for
 
-    results = results_path_for(scenes, results)
-    check_writable("results", results)
+    if results is not None:
+        if out is not None:
+            raise JaxrockInputError("give the results file as --out, not also as a second argument")
+        typer.echo("Warning: the results file as a second argument is deprecated; use --out (the old form is removed in the next "
+                   "release)", err=True)
+    results = results_path_for(scenes, out or results or "out/")
+    check_writable("--out", results)
     from ..analyses.scenes import run_scenes
     from ..interrupt import Interrupted
 

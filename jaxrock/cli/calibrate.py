@@ -19,7 +19,7 @@ from .app import app, FORCE_OPTION, JSON_OPTION
 @_guarded
 def calibrate(
     out: Path = typer.Option(Path("out/calibration"), help="output folder (calibration.csv and the figures)"),
-    tan_alphas: Optional[str] = typer.Option(None, help="slenderness values to calibrate at ('0.1,0.2,0.3' or 'a:b:n'; default 0.05:0.35:13)"),
+    tan_alpha: Optional[str] = typer.Option(None, help="slenderness values to calibrate at ('0.1,0.2,0.3' or 'a:b:n'; default 0.05:0.35:13)"),
     max_iter: int = typer.Option(300, help="optimiser iterations at most"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
     as_json: bool = JSON_OPTION,
@@ -33,11 +33,11 @@ def calibrate(
     check_writable("--out", out / "calibration.csv")
     _hold(out, "--out")
     ta = None
-    if tan_alphas is not None:
-        ta = parse_values("--tan-alphas", tan_alphas)
-        TAN_ALPHA.check(ta, "--tan-alphas")
+    if tan_alpha is not None:
+        ta = parse_values("--tan-alpha", tan_alpha)
+        TAN_ALPHA.check(ta, "--tan-alpha")
         if np.unique(ta).size < 3:
-            raise JaxrockInputError(f"--tan-alphas = {tan_alphas!r}: {np.unique(ta).size} distinct value(s); "
+            raise JaxrockInputError(f"--tan-alpha = {tan_alpha!r}: {np.unique(ta).size} distinct value(s); "
                                     "the power-law fit c̄ = k (α/0.1)^n needs at least 3")
     from ..reports import calibration_report
 

@@ -6,6 +6,8 @@ from __future__ import annotations
 import contextlib
 import errno
 import functools
+import os
+import re
 from pathlib import Path
 from typing import Optional
 
@@ -31,6 +33,15 @@ class _OneLineErrors(typer.core.TyperGroup):
             typer.echo(f"Error: {PLUGIN_ERRORS[0]}", err=True)
             sys.exit(EXIT_INPUT)
         try:
+            from .._validate import JaxrockInputError
+            from .grammar import upgrade
+
+            if not os.environ.get(f"_{(prog_name or 'jaxrock').upper().replace('-', '_')}_COMPLETE"):  # not while completing
+                try:
+                    args = upgrade(list(sys.argv[1:] if args is None else args))  # the previous release's spellings, with a warning
+                except JaxrockInputError as e:
+                    typer.echo(f"Error: {e}", err=True)
+                    sys.exit(EXIT_INPUT)
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except typer.Abort:
             typer.echo("interrupted: nothing kept", err=True)
@@ -224,10 +235,36 @@ def report(command: str, data: dict, units: dict | None = None) -> None:
         typer.echo(json.dumps(plain(doc), allow_nan=False, ensure_ascii=False, indent=1))
 
 
+_NAMED = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?: \([^)]*\))?(?: \[[^\]]*\])?) = ")
+
+
+def command_flags(fn) -> dict[str, str]:
+    """A command function's options: Python parameter → its flag ("tan_alpha" → "--tan-alpha";
+    "save_path" → "--save", as declared)."""
+    import inspect
+
+    flags = {}
+    for name, q in inspect.signature(fn).parameters.items():
+        decls = [d for d in getattr(q.default, "param_decls", None) or () if d.startswith("--")]
+        if type(q.default).__name__ == "OptionInfo":
+            flags[name] = decls[0].split("/")[0] if decls else "--" + name.replace("_", "-")
+    return flags
+
+
+def in_flags(message: str, flags: dict[str, str]) -> str:
+    """A library's message that starts by naming a Python parameter ("tan_alpha = 2 is outside …",
+    "height (2h) [m] = -1 …") as the command's flag for it (`flags`: "--tan-alpha = 2 …")."""
+    m = _NAMED.match(message)
+    flag = None if m is None else flags.get(m.group(1))
+    return message if flag is None else flag + message[len(m.group(1)):]
+
+
 def _guarded(fn):
     """A command: a `JaxrockInputError` becomes a one-line message and exit code 2; SIGINT and
     SIGTERM stop the run at its next safe point (`jaxrock.interrupt`) and exit 130 — a command
     with work to keep catches `Interrupted` itself and says how to resume."""
+
+    flags = command_flags(fn)
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -245,7 +282,7 @@ def _guarded(fn):
                 return fn(*args, **kwargs)
         except JaxrockInputError as e:
             remove_made_folders()
-            _fail(str(e))
+            _fail(in_flags(str(e), flags))
         except OSError as e:
             if e.errno not in _NO_ROOM:
                 raise

@@ -100,17 +100,6 @@ def _check_refine(refine: int):
         raise JaxrockInputError(f"--refine = {refine}; valid: an integer in [0, {MAX_REFINE}] (each bisection halves the bracket)")
 
 
-def _axis(name: str, lo: float, hi: float, n: int) -> np.ndarray:
-    from .._validate import JaxrockInputError, check_positive
-
-    _check_count(f"--n-{name}", n)
-    check_positive(f"--{name}-min", lo)
-    check_positive(f"--{name}-max", hi)
-    if n > 1 and not hi > lo:
-        raise JaxrockInputError(f"--{name}-max = {hi:g} must be > --{name}-min = {lo:g}")
-    return np.linspace(lo, hi, n) if n > 1 else np.asarray([lo], dtype=float)
-
-
 def parse_values(name: str, text: str) -> np.ndarray:
     """A list option: "1,2,5" (values) or "a:b:n" (n values evenly spaced from a to b)."""
     import re
@@ -139,6 +128,31 @@ def parse_values(name: str, text: str) -> np.ndarray:
     return np.asarray(vals, dtype=float)
 
 
+def model_option(default: str, many: bool = False):
+    """`--model`, one grammar in every command: kinds separated by commas ("rigid,spring"), parsed
+    into a `ModelKind` (a list of them where the command runs several, `many`); an unknown kind, a
+    kind named twice, or several where the command runs one, is refused in one line."""
+    import typer
+
+    def parse(text):
+        if isinstance(text, (ModelKind, list)):
+            return text
+        kinds = [k.strip() for k in str(text).split(",") if k.strip()]
+        bad = [k for k in kinds if k not in model_kinds()]
+        if not kinds or bad or len(set(kinds)) < len(kinds):
+            what = f"not a model kind: {', '.join(bad)}" if bad else ("no model" if not kinds else "a model named twice")
+            raise typer.BadParameter(f"{what}; valid: {'comma-separated, each once, of ' if many else ''}{', '.join(model_kinds())}")
+        if not many and len(kinds) > 1:
+            raise typer.BadParameter(f"{text!r} names {len(kinds)}; this command runs one model kind, one of {', '.join(model_kinds())}")
+        return [ModelKind(k) for k in kinds] if many else ModelKind(kinds[0])
+
+    from ..scene import parameter_help
+
+    what = (f"model kinds, comma-separated, each running the same work ({' | '.join(model_kinds())})" if many
+            else parameter_help("model", valid=False))
+    return typer.Option(default, parser=parse, metavar="KIND[,KIND...]" if many else "KIND", help=what)
+
+
 def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alpha_base=None, *, undamped=False, **parameters):
     """The model of a CLI scene: every parameter flag given (None: not given) must be one the model
     kind takes (the registry says which, `jaxrock.scene.takes`); `undamped` sets each damping
@@ -146,17 +160,18 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
     `scene_model`, as a scenes-file row is."""
     from .._validate import JaxrockInputError
     from ..scene import UNDAMPED, check_slenderness, takes
+    from .grammar import flag_of
 
     kind = ModelKind(model).value
     check_slenderness(height, tan_alpha, tan_alpha_base)  # refused before JAX is imported
     given = {k: v for k, v in parameters.items() if v is not None}
     for name in given:
         if kind not in takes(name):
-            raise JaxrockInputError(f"--{name} applies to --model {' / '.join(takes(name))} only, not {kind}")
+            raise JaxrockInputError(f"{flag_of(name)} applies to --model {' / '.join(takes(name))} only, not {kind}")
     if undamped:
         for name in (k for k in UNDAMPED if kind in takes(k)):
             if name in given:
-                raise JaxrockInputError(f"give --undamped or --{name}, not both")
+                raise JaxrockInputError(f"give --undamped or {flag_of(name)}, not both")
             given[name] = UNDAMPED[name]
     if "backbone" in given:
         given["backbone"] = BackboneKind(given["backbone"]).value
@@ -171,11 +186,12 @@ def _integrator(model: ModelKind, tol: Optional[float]):
     checked (`Checked`: status `inaccurate` beyond 1e-2 in max θ/α); None: the default."""
     if tol is None:
         return None
-    from .._validate import JaxrockInputError
+    from .._validate import JaxrockInputError, check_range
     from ..spring import Checked, GeneralizedAlpha
 
     if model == ModelKind.rigid:
         raise JaxrockInputError("--tol selects the spring model's generalized-α integrator; the rigid model takes none")
+    check_range("--tol", tol, 0.0, 0.1, lo_open=True, hi_open=True)  # the companion run at 10x the tolerance stays below 1
     return Checked(GeneralizedAlpha(rtol=tol, atol=tol))
 
 
@@ -209,7 +225,9 @@ def _grid_line(o, values) -> str:
 
 
 def spectrum_summary(spec, seconds: float) -> str:
+    """The summary `jaxrock spectrum` prints, in the command line's words (`--model`'s and `--pulse`'s kinds)."""
     from ..outputs import OUTPUTS, computed
+    from ..scene import pulse_kind_of
     from ..results import STATUS_NAMES, SUMMARY
 
     a = spec.attrs
@@ -218,7 +236,7 @@ def spectrum_summary(spec, seconds: float) -> str:
     tan_col = float(a["width"]) / float(a["height"])
     base = "" if abs(tan_col - float(a["tan_alpha"])) < 1e-12 else f" on a base tanα′ = {float(a['tan_alpha']):.4g}"
     lines = [
-        f"spectrum: {a.get('model')}, {a.get('pulse')}, 2h = {float(a['height']):g} m, tanα = {tan_col:.4g}{base} "
+        f"spectrum: {a.get('model_kind', a.get('model'))} model, {pulse_kind_of(str(a.get('pulse')))} pulse, 2h = {float(a['height']):g} m, tanα = {tan_col:.4g}{base} "
         f"(rocking α = {float(a['alpha']):.4g} rad, p = {float(a['p']):.4g} rad/s)",
         f"grid: {n_w} ω_p/p in [{spec.omega_ratio[0]:g}, {spec.omega_ratio[-1]:g}] × {n_a} a_p/(g tanα) in "
         f"[{spec.accel_ratio[0]:g}, {spec.accel_ratio[-1]:g}] = {n} cells in {seconds:.1f} s ({1e3 * seconds / n:.2f} ms/cell)",

@@ -11,21 +11,21 @@ import typer
 
 from .guards import (report, say, _estimate, _exit_if_untrusted, _guarded, _history, _hold, _status_counts, record_run_seconds,
                      SENSITIVITY_COST)
-from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, RECORD_ALIASES, builtin_record_names, parameter_help
-from .options import (ModelKind, _check_refine, _excitation, _integrator, build_model, parse_values, SENSITIVITY_HELP,
+from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, RECORD_ALIASES, builtin_record_names
+from .options import (model_option, ModelKind, _check_refine, _excitation, _integrator, build_model, parse_values, SENSITIVITY_HELP,
                       uncertain_line)
-from .app import app, FORCE_OPTION, JSON_OPTION
+from .app import TOL_HELP, app, FORCE_OPTION, JSON_OPTION
 
 
 @app.command("record-spectrum")
 @_guarded
 def record_spectrum(
     record: str = typer.Option(RECORD_ALIASES[0], help=f"record file (.AT2 or two-column text), or a packaged record ({builtin_record_names()})"),
-    model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
+    model: ModelKind = model_option(DEFAULT_MODEL),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′"),
-    heights: str = typer.Option("1,2,3,5,7,10,15,20", help="body heights 2h [m]: '1,2,5' or 'a:b:n'"),
-    scales: str = typer.Option(
+    height: str = typer.Option("1,2,3,5,7,10,15,20", help="body heights 2h [m]: '1,2,5' or 'a:b:n'"),
+    scale: str = typer.Option(
         "0.5:12:16",
         help="record factors of the vmapped sweep ('1,2,5' or 'a:b:n'); the first that overturns is then refined by "
         "bisection. A coarse sweep is cheap (a vmapped record run costs about as much per lane as a bisection step) "
@@ -34,7 +34,7 @@ def record_spectrum(
     units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
                                  "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
     refine: int = typer.Option(8, help="bisections refining the least overturning factor (resolution: sweep step / 2^refine)"),
-    tol: Optional[float] = typer.Option(None, help="spring models: generalized-α at this local tolerance (default: the model's default integrator)"),
+    tol: Optional[float] = typer.Option(None, help=TOL_HELP),
     out: str = typer.Option("out/record_spectrum", help="output stem: <out>.nc, <out>.csv, <out>.png; a folder (or a path "
                             "ending in /) means <out>/record_spectrum.*"),
     sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
@@ -46,8 +46,8 @@ def record_spectrum(
     """Least scale factor of a record that overturns the body, per height (paper figure 10)."""
     from ..io.files import check_output, output_stem
 
-    hs = parse_values("--heights", heights)
-    sc = parse_values("--scales", scales)
+    hs = parse_values("--height", height)
+    sc = parse_values("--scale", scale)
     _check_refine(refine)
     m = build_model(model, float(hs[0]), tan_alpha, tan_alpha_base)
     integ = _integrator(model, tol)

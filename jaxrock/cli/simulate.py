@@ -10,10 +10,10 @@ import numpy as np
 import typer
 
 from .guards import report, say, _exit_if_untrusted, _guarded, _history, _status_counts
-from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, builtin_record_names, parameter_help
-from .options import (MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _excitation, _integrator, build_model, figure_path,
+from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, builtin_record_names
+from .options import (model_option, MAX_PLOT_POINTS, BackboneKind, ModelKind, PulseKind, _excitation, _integrator, build_model, figure_path,
                       solution_summary, SENSITIVITY_HELP, split_params, with_params)
-from .app import app, BACKBONE_DEFAULTS, FORCE_OPTION, JSON_OPTION, SMOOTHING_DEFAULTS, UNDAMPED_HELP
+from .app import TOL_HELP, app, BACKBONE_DEFAULTS, FORCE_OPTION, JSON_OPTION, SMOOTHING_DEFAULTS, UNDAMPED_HELP
 
 
 def _simulate(model, excitation, save=None, integrator=None, sensitivity: bool = False):
@@ -35,7 +35,7 @@ def simulate(
     height: float = typer.Option(10.0, help="full height 2h [m]"),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h"),
-    model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
+    model: ModelKind = model_option(DEFAULT_MODEL),
     pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="pulse kind: the Ricker pulses of eqs. 28 (symmetric) and 29 (antisymmetric), a sine pulse of --n-cycles"),
     a_p: Optional[float] = typer.Option(None, "--a-p", help="pulse amplitude [m/s²] (default: --accel-ratio 4)"),
     accel_ratio: Optional[float] = typer.Option(None, help="pulse amplitude as a_p/(g tanα) (default 4)"),
@@ -49,7 +49,7 @@ def simulate(
     backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {BACKBONE_DEFAULTS}; the bilinear "
                                                     "at θy = 1e-5 α′ is within 1e-3 of the sharp limit, README)"),
     smoothing: Optional[float] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1) (default {SMOOTHING_DEFAULTS})"),
-    tol: Optional[float] = typer.Option(None, help="spring models: run generalized-α at this local tolerance in (0, 1); default: the model's default integrator"),
+    tol: Optional[float] = typer.Option(None, help=TOL_HELP),
     plot: Optional[str] = typer.Option(None, help="write a time-history plot here (PNG; another suffix matplotlib knows, e.g. .pdf, "
                                        "picks that format)"),
     save_path: Optional[str] = typer.Option(None, "--save", help="write the time history here: time, ground acceleration and every "

@@ -10,27 +10,24 @@ import typer
 
 from .guards import (report, say, _estimate, _exit_if_untrusted, _guarded, _history, _hold, _interrupted, _status_counts,
                      SENSITIVITY_COST, cell_seconds)
-from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, MAX_REFINE, parameter_help
-from .options import (ModelKind, PulseKind, _axis, _check_count, _integrator, build_model, spectrum_summary, SENSITIVITY_HELP,
+from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, MAX_REFINE
+from .options import (model_option, parse_values, ModelKind, PulseKind, _check_count, _integrator, build_model, spectrum_summary, SENSITIVITY_HELP,
                       check_pulse_params, split_params, with_params)
-from .app import app, FORCE_OPTION, JSON_OPTION, RATIO_UNITS, UNDAMPED_HELP
+from .grammar import DEFAULT_GRID
+from .app import TOL_HELP, app, FORCE_OPTION, JSON_OPTION, RATIO_UNITS, UNDAMPED_HELP
 
 
 @app.command()
 @_guarded
 @with_params()
 def spectrum(
-    model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
+    model: ModelKind = model_option(DEFAULT_MODEL),
     height: float = typer.Option(10.0, help="full height 2h [m]"),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα = b/h, in (0, 1)"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′ = b′/h, in [tanα, 1)"),
     pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="pulse kind: the Ricker pulses of eqs. 28 (symmetric) and 29 (antisymmetric), a sine pulse of --n-cycles"),
-    omega_min: float = typer.Option(1.0, help="smallest ω_p/p"),
-    omega_max: float = typer.Option(15.0, help="largest ω_p/p"),
-    n_omega: int = typer.Option(48, help="number of ω_p/p values"),
-    accel_min: float = typer.Option(0.5, help="smallest a_p/(g tanα)"),
-    accel_max: float = typer.Option(10.0, help="largest a_p/(g tanα)"),
-    n_accel: int = typer.Option(48, help="number of a_p/(g tanα) values"),
+    omega_ratio: str = typer.Option(DEFAULT_GRID["spectrum"]["--omega-ratio"], help="ω_p/p′ axis: 'a:b:n' or values '1,2,5' (increasing)"),
+    accel_ratio: str = typer.Option(DEFAULT_GRID["spectrum"]["--accel-ratio"], help="a_p/(g tanα′) axis: 'a:b:n' or values '1,2,5' (increasing)"),
     out: str = typer.Option("out/spectrum", help="output stem: writes <out>.nc (netCDF) and <out>.png; a folder (or a path "
                             "ending in /) means <out>/spectrum.nc and .png"),
     undamped: bool = typer.Option(False, "--undamped", help=UNDAMPED_HELP),
@@ -38,9 +35,7 @@ def spectrum(
     batch_size: int = typer.Option(4096, help="largest number of cells per vmapped batch (memory bound); the grid is split into batches "
                                    "of sizes the compiled passes share"),
     refine: int = typer.Option(10, min=0, max=MAX_REFINE, help="bisections of the uplift and overturning lines between grid rows (0: grid lines)"),
-    tol: Optional[float] = typer.Option(
-        None, help="spring models: run generalized-α at this local tolerance in (0, 0.1), its global error checked by a run at 10x "
-        "the tolerance (status inaccurate beyond 1e-2 in θ/α; see README); default: the model's default integrator"),
+    tol: Optional[float] = typer.Option(None, help=TOL_HELP),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP + "; off by default on pulses "
                                      "(none of 240 seeded pulse cells changed verdict, benchmarks/study_uncertain.py)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
@@ -52,8 +47,10 @@ def spectrum(
     """Overturning spectrum: max θ/α over a grid of (ω_p/p, a_p/(g tanα)) (paper figures 6, 9, 11)."""
     from ..io.files import check_output, output_stem
 
-    wr = _axis("omega", omega_min, omega_max, n_omega)
-    ar = _axis("accel", accel_min, accel_max, n_accel)
+    from .._validate import check_grid
+
+    wr = check_grid("--omega-ratio", parse_values("--omega-ratio", omega_ratio))
+    ar = check_grid("--accel-ratio", parse_values("--accel-ratio", accel_ratio))
     _check_count("--batch-size", batch_size)
     model_kw, pulse_kw = split_params(params)
     check_pulse_params(pulse.value, pulse_kw)

@@ -12,8 +12,9 @@ import typer
 
 from .guards import (report, say, EXIT_INTERRUPTED, _estimate, _exit_if_untrusted, _guarded, _history, _hold, _resume_command,
                      _status_counts, record_run_seconds, SENSITIVITY_COST)
-from ..scene import BUILTIN_SUITE, MAX_ENSEMBLE, RECORD_ALIASES, builtin_record_names, model_kinds
-from .options import _check_count, _check_refine, parse_values, SENSITIVITY_HELP, LIST_HELP as _LIST, uncertain_line
+from ..scene import BUILTIN_SUITE, MAX_ENSEMBLE, RECORD_ALIASES, builtin_record_names
+from .options import model_option, _check_count, _check_refine, parse_values, SENSITIVITY_HELP, LIST_HELP as _LIST, uncertain_line
+from .grammar import flag_of
 from .app import app, FORCE_OPTION, JSON_OPTION
 
 
@@ -21,9 +22,10 @@ from .app import app, FORCE_OPTION, JSON_OPTION
 @_guarded
 def suite(
     records: Optional[list[str]] = typer.Argument(None, help="record files, folders of records (.AT2, .txt, .dat, .csv), list files (.list: one per line) and "
-                                                  f"packaged records ({builtin_record_names()}) or '{BUILTIN_SUITE}' (all five); default: '{RECORD_ALIASES[1]}'"),
-    model: str = typer.Option("rigid,spring,spring-flexible", help=f"model kinds, comma-separated ({', '.join(model_kinds())}): "
-                              "each runs the same suite"),
+                                                  f"packaged records ({builtin_record_names()}) or '{BUILTIN_SUITE}' (all five), as --record does; default: '{RECORD_ALIASES[0]}'"),
+    record: Optional[str] = typer.Option(None, help="the records, as the arguments take them, separated by commas (the grammar of "
+                                         "sweep --record)"),
+    model: list = model_option("rigid,spring,spring-flexible", many=True),
     height: str = typer.Option("1,2,4,8", help=f"full height 2h [m]: {_LIST}"),
     tan_alpha: str = typer.Option("0.2", help=f"slenderness tanα: {_LIST}"),
     scale: str = typer.Option("0.25:4:16", help="record factors of the sweep ('1,2,5' or 'a:b:n'): the fragility's observations, "
@@ -48,11 +50,7 @@ def suite(
     from .._validate import JaxrockInputError, check_grid, check_writable
     from ..analyses.suite import _check_im, check_motion
 
-    kinds = [k.strip() for k in model.split(",") if k.strip()]
-    bad = [k for k in kinds if k not in model_kinds()]
-    if not kinds or bad or len(set(kinds)) < len(kinds):
-        what = ", ".join(bad) or ("no model" if not kinds else "a model named twice")
-        raise JaxrockInputError(f"--model {model!r}: {what}; valid: comma-separated, each once, of {', '.join(model_kinds())}")
+    kinds = [k.value for k in model]
     _check_refine(refine)
     _check_count("--boot", boot)
     _check_im(im)
@@ -62,7 +60,7 @@ def suite(
         raise JaxrockInputError("--ensemble replaces the uncertain verdicts, which only --sensitivity finds: drop --no-sensitivity")
     given = {}
     for name, text in (("height", height), ("tan_alpha", tan_alpha)):
-        v = parse_values("--" + name.replace("_", "-"), text)
+        v = parse_values(flag_of(name), text)
         given[name] = float(v[0]) if v.size == 1 else v
     sc = parse_values("--scale", scale)
     if sc.size < 2:
@@ -73,11 +71,12 @@ def suite(
     from ..io.records import read_records
     from ..analyses.sweep import Sweep
 
-    for src in records or ():
+    records = [*(records or ()), *(r.strip() for r in (record or "").split(",") if r.strip())]
+    for src in records:
         if Path(src).is_dir() and os.path.realpath(src) == os.path.realpath(out):
             raise JaxrockInputError(f"--out {out}: is the records folder {src}; the suite's CSV outputs would be read as records "
                                     "on a rerun: choose another --out")
-    recs = read_records(records or [RECORD_ALIASES[1]], units=units)
+    recs = read_records(records or [RECORD_ALIASES[0]], units=units)
     check_motion(recs)
     seconds = max(float(r.t_end - r.t_start) for r in recs)
     runs = cost = 0.0
@@ -87,7 +86,6 @@ def suite(
         runs, cost = runs + n, cost + n * record_run_seconds(k, seconds) * (SENSITIVITY_COST if sensitivity else 1.0)
     _estimate(int(runs), kinds[0], yes, what=f"record runs ({', '.join(kinds)})", per_cell=cost / runs)
     from ..analyses.suite import run_suite
-    from ..geometry import G
     from ..interrupt import Interrupted
     from ..io import store as zstore
     from ..reports import suite_files
@@ -104,10 +102,10 @@ def suite(
     files = suite_files(ds, out, f"{len(recs)} records")
     say(f"suite: {len(recs)} records × {len(kinds)} model(s) × {ds.sizes['scale']} factors"
                + "".join(f" × {len(v)} {k}" for k, v in given.items() if np.ndim(v)) + f" in {secs:.1f} s")
-    say(f"{'record':<24}{'PGA [g]':>9}{'PGV [m/s]':>11}{'D5-95 [s]':>11}")
+    say(f"{'record':<24}{'PGA [m/s2]':>11}{'PGV [m/s]':>11}{'D5-95 [s]':>11}")
     for r in range(ds.sizes["record"]):
         one = ds.isel(record=r)
-        say(f"{str(one.record.values)[:23]:<24}{float(one.pga) / G:9.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
+        say(f"{str(one.record.values)[:23]:<24}{float(one.pga):11.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
     say(Path(files["table"]).read_text(encoding="utf-8").split("\n\n")[1])
     say(uncertain_line(ds.least_scale_uncertain.values if sensitivity else None, ds.uncertain.values, "least factor(s)",
                               ds.least_scale.size))

@@ -14,21 +14,22 @@ import typer
 from . import guards
 from .guards import (report, say, EXIT_INTERRUPTED, _estimate, _exit_if_untrusted, _guarded, _history, _resume_command,
                      _status_counts, record_run_seconds, SENSITIVITY_COST, cell_seconds)
-from ..scene import (BUILTIN_SUITE, DEFAULT_MODEL, DEFAULT_PULSE, builtin_record_names, model_params, parameter_help, pulse_params)
-from .options import (BackboneKind, ModelKind, PulseKind, _check_count, _integrator, parse_values, SENSITIVITY_HELP, LIST_HELP as
+from ..scene import (BUILTIN_SUITE, DEFAULT_MODEL, DEFAULT_PULSE, builtin_record_names, model_params, pulse_params)
+from .options import (model_option, BackboneKind, ModelKind, PulseKind, _check_count, _integrator, parse_values, SENSITIVITY_HELP, LIST_HELP as
                       _LIST, check_pulse_params, uncertain_line, with_params)
-from .app import app, BACKBONE_DEFAULTS, JSON_OPTION
+from .grammar import flag_of
+from .app import TOL_HELP, app, BACKBONE_DEFAULTS, JSON_OPTION
 
 
 @app.command()
 @_guarded
 @with_params(lists=True)
 def sweep(
-    model: ModelKind = typer.Option(ModelKind(DEFAULT_MODEL), help=parameter_help("model", valid=False)),
+    model: ModelKind = model_option(DEFAULT_MODEL),
     pulse: PulseKind = typer.Option(PulseKind(DEFAULT_PULSE), help="pulse kind: the Ricker pulses of eqs. 28 (symmetric) and 29 (antisymmetric), a sine pulse of --n-cycles (pulse sweeps)"),
     accel_ratio: Optional[str] = typer.Option(None, help=f"a_p/(g tanα′): {_LIST} (pulse sweeps; default 0.5:10:48)"),
     omega_ratio: Optional[str] = typer.Option(None, help=f"ω_p/p′: {_LIST} (pulse sweeps; default 1:15:48)"),
-    records: Optional[str] = typer.Option(None, help="a record sweep instead of pulses: record files, folders of records (.AT2, "
+    record: Optional[str] = typer.Option(None, help="a record sweep instead of pulses: record files, folders of records (.AT2, "
                                           f".txt, .dat, .csv), packaged records ({builtin_record_names()}) or '{BUILTIN_SUITE}' (all of them), separated by commas"),
     units: Optional[str] = typer.Option(None, help="acceleration units of two-column record files (default g)"),
     scale: Optional[str] = typer.Option(None, help=f"record factor: {_LIST} (record sweeps; default 1)"),
@@ -37,14 +38,14 @@ def sweep(
     tan_alpha_base: Optional[str] = typer.Option(None, help=f"extended base tanα′ ≥ tanα: {_LIST}"),
     smoothing: Optional[str] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1): {_LIST}"),
     backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {BACKBONE_DEFAULTS})"),
-    tol: Optional[float] = typer.Option(None, help="spring models: generalized-α at this local tolerance (default: the model's default integrator)"),
-    store: Path = typer.Option(Path("out/sweep.zarr"), help="the Zarr store (xarray.open_zarr reads it); a rerun of the same "
+    tol: Optional[float] = typer.Option(None, help=TOL_HELP),
+    out: Path = typer.Option(Path("out/sweep.zarr"), help="the Zarr store (xarray.open_zarr reads it); a rerun of the same "
                                "command resumes it, one with other parameters is refused"),
     chunk_size: int = typer.Option(1024, help="most scenes per chunk: one vmapped batch, one Zarr chunk, one Dask task (1024: the fastest of 256, 1024, 4096 on the rigid model, benchmarks/bench_sweep.py)"),
     devices: Optional[int] = typer.Option(None, help="run chunks on this many local devices, one chunk per device at a time "
                                           "(default: all; on a CPU, one device per core)"),
     scheduler: Optional[str] = typer.Option(None, help="address of a running Dask scheduler (tcp://host:8786): each chunk is a "
-                                            "task of its workers, which write into --store (a folder they all see); needs "
+                                            "task of its workers, which write into --out (a folder they all see); needs "
                                             "jaxrock[distributed]"),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
@@ -67,35 +68,35 @@ def sweep(
     for name, text in lists.items():
         if text is None:
             continue
-        flag = "--" + name.replace("_", "-")
+        flag = flag_of(name)
         if (name in model_params() or name == "smoothing") and model.value not in takes(name):
             raise JaxrockInputError(f"{flag} applies to --model {' / '.join(takes(name))} only, not {model.value}")
         if name in pulse_params():
-            check_pulse_params(pulse.value, {name: text}, records is not None)
+            check_pulse_params(pulse.value, {name: text}, record is not None)
         v = parse_values(flag, text)
         given[name] = float(v[0]) if v.size == 1 else v
-    if records is None:
+    if record is None:
         if scale is not None:
-            raise JaxrockInputError("--scale applies to record sweeps (--records), not to pulses")
+            raise JaxrockInputError("--scale applies to record sweeps (--record), not to pulses")
         given.setdefault("accel_ratio", np.linspace(0.5, 10.0, 48))
         given.setdefault("omega_ratio", np.linspace(1.0, 15.0, 48))
         recs = None
     else:
         for name in ("accel_ratio", "omega_ratio"):
             if name in given:
-                raise JaxrockInputError(f"--{name.replace('_', '-')} applies to pulse sweeps, not to --records")
+                raise JaxrockInputError(f"{flag_of(name)} applies to pulse sweeps, not to --record")
         from ..io.records import read_records
 
-        recs = read_records([r for r in records.split(",") if r.strip()], units=units)
+        recs = read_records([r for r in record.split(",") if r.strip()], units=units)
     if scheduler is not None and devices is not None:
         raise JaxrockInputError("--devices applies to this process; with --scheduler each worker uses its own devices")
     devs = None if scheduler is not None else _local_devices(devices)
-    if store.name in ("", ".", ".."):
-        raise JaxrockInputError(f"--store {str(store)!r}: names the current or a parent folder, not a store; "
-                                "give a folder of its own, e.g. --store out/sweep.zarr")
-    if store.exists() and not store.is_dir():
-        raise JaxrockInputError(f"--store {store}: is a file; expected a Zarr store folder (new or made by this sweep)")
-    check_writable("--store", store.with_name(store.name + ".lock"))
+    if out.name in ("", ".", ".."):
+        raise JaxrockInputError(f"--out {str(out)!r}: names the current or a parent folder, not a store; "
+                                "give a folder of its own, e.g. --out out/sweep.zarr")
+    if out.exists() and not out.is_dir():
+        raise JaxrockInputError(f"--out {out}: is a file; expected a Zarr store folder (new or made by this sweep)")
+    check_writable("--out", out.with_name(out.name + ".lock"))
     from ..analyses.sweep import Sweep
 
     sw = Sweep.make(model.value, pulse=None if recs else pulse.value, records=recs, integrator=_integrator(model, tol),
@@ -132,11 +133,11 @@ def sweep(
 
     t0 = time.perf_counter()
     try:
-        ds = run_sweep(sw, store, client=client, devices=devs, progress=not quiet,
+        ds = run_sweep(sw, out, client=client, devices=devs, progress=not quiet,
                        history=_history(), on_chunk=count)
     except Interrupted:
-        kept = len(zstore.flagged(store, sw)) if store.exists() else 0
-        typer.echo(f"interrupted: {kept} of {sw.n_chunks} chunks kept in {store}; resume with: {_resume_command()}", err=True)
+        kept = len(zstore.flagged(out, sw)) if out.exists() else 0
+        typer.echo(f"interrupted: {kept} of {sw.n_chunks} chunks kept in {out}; resume with: {_resume_command()}", err=True)
         raise typer.Exit(EXIT_INTERRUPTED) from None
     seconds = time.perf_counter() - t0
     dims = " × ".join(f"{len(v)} {k}" for k, v in sw.axes.items())
@@ -148,11 +149,11 @@ def sweep(
     say(f"overturned: {int(ds.overturned.sum()):,} scenes ({100 * float(ds.overturned.mean()):.1f} %); uplifted: "
                f"{int(ds.uplifted.sum()):,}")
     say(uncertain_line(ds.uncertain.values if sensitivity else None, what="scenes"))
-    say(f"wrote {store}")
+    say(f"wrote {out}")
     report("sweep", {"model": sw.model, "axes": {k: np.asarray(v) if k != "record" else list(v) for k, v in sw.axes.items()},
                      "scenes": sw.size, "chunks": sw.n_chunks, "run": ran, "overturned": int(ds.overturned.sum()),
                      "uplifted": int(ds.uplifted.sum()), "uncertain": int(ds.uncertain.sum()) if sensitivity else None,
-                     "status": _status_counts(ds.status.values), "seconds": seconds, "files": [store]},
+                     "status": _status_counts(ds.status.values), "seconds": seconds, "files": [out]},
            {"seconds": "s", **{k: u for k, (_, u, _) in sweep_quantities(sw.model if isinstance(sw.model, str) else None).items()
                                if k in sw.axes and u}})
     _exit_if_untrusted(_status_counts(ds.status.values), "scene(s)")

@@ -1,4 +1,4 @@
-"""The scenes file and the results file of a batch run (`jaxrock batch scenes.csv results.csv
+"""The scenes file and the results file of a batch run (`jaxrock batch scenes.csv --out results.csv
 [--resume]`, or `run_scenes(scenes, results)`, `jaxrock.analyses.scenes`): reading and checking the
 scenes, each row's model and excitation, and the results rows written, read back and resumed.
 
