@@ -58,7 +58,7 @@ def test_run_batch_flags_invalid_lanes_on_either_path(kind):
     "build, needle",
     [
         (lambda: jr.Block.from_slenderness(10.0, 1e-8), "tan_alpha = 1e-08 is outside the valid range [0.001, 1)"),
-        (lambda: jr.Column(1e-3), "--youngs-modulus (Young's modulus) [Pa] = 0.001 is outside the valid range [1e+06, 1e+15]"),
+        (lambda: jr.Column(1e-3), "E (Young's modulus) [Pa] = 0.001 is outside the valid range [1e+06, 1e+15]"),
         (lambda: jr.Column(30e9, 1e12), "rho (density) [kg/m^3] = 1e+12 is outside the valid range [10, 30000]"),
         (lambda: jr.simulate(jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2)), jr.RickerPulse(5.0, 6.0), t1=-1.0),
          "t1 (end time) applies to a time history"),
