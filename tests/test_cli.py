@@ -228,9 +228,13 @@ def test_spectrum_file_says_how_it_was_made(tmp_path):
     assert r.exit_code == 0, r.output
     assert "verdict uncertain: not computed" in r.output and "sensitivity: not computed" in r.output, r.output
     with xr.open_dataset(tmp_path / "spec.nc", engine="scipy") as ds:
-        units = {o.name: o.units for o in jr.SUMMARY}  # times in s; ratios, flags, counts and codes 1
+        from jaxrock.io.cf import _scalars
+
+        # times in s; ratios, flags, counts and codes 1; the scene's numbers in their own (height m, alpha rad, p rad s-1)
+        units = {**{k: u for k, (_, u) in _scalars().items()}, **{o.name: o.units for o in jr.SUMMARY}}
         for name in [*ds.data_vars, *ds.coords]:
             assert ds[name].attrs.get("units") == units.get(name, "1"), name
+        assert ds["alpha"].attrs["units"] == "rad" and ds["height"].attrs["units"] == "m"
         for name in ("overturned", "uplifted", "status"):
             values, meanings = ds[name].attrs["flag_values"], ds[name].attrs["flag_meanings"].split()
             assert len(np.atleast_1d(values)) == len(meanings) and list(np.atleast_1d(values)) == list(range(len(meanings)))
@@ -239,7 +243,7 @@ def test_spectrum_file_says_how_it_was_made(tmp_path):
         assert a["Conventions"].startswith("CF-") and a["jaxrock_version"] and a["jax_version"]
         assert "GeneralizedAlpha(" in a["integrator"] and "rtol=1e-06" in a["integrator"]
         model = jr.SpringModel(jr.Block.from_slenderness(10.0, 0.2))
-        assert a["cbar"] == pytest.approx(float(model.cbar), rel=1e-15)
+        assert float(ds["cbar"]) == pytest.approx(float(model.cbar), rel=1e-15)  # a scalar variable (issue 58), was an attribute
         assert re.match(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ jaxrock ", a["history"])
     # the model, grid and batch of test_spectrum_writes_nc_equal_to_library_and_png: its program is reused
     rigid_model = jr.RigidModel(jr.Block.from_slenderness(10.0, 0.2))
