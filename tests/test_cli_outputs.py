@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import subprocess
 import sys
 
@@ -26,10 +27,17 @@ def _doc(r) -> dict:
 
 def test_spectrum_json_agrees_with_its_netcdf(tmp_path):
     """`spectrum --json`: one JSON document (strict: no NaN or Infinity) whose counts, boundaries
-    and grid are the netCDF file's; null where a boundary is not in the grid."""
-    r = invoke("spectrum", "--omega-ratio", "1.5:9:4", "--accel-ratio", "0.5:8:5",
-               "--refine", 3, "--out", tmp_path / "s", "--quiet", "--json")
+    and grid are the netCDF file's; null where a boundary is not in the grid; the files are 0644 under
+    umask 022."""
+    old = os.umask(0o022)
+    try:
+        r = invoke("spectrum", "--omega-ratio", "1.5:9:4", "--accel-ratio", "0.5:8:5",
+                   "--refine", 3, "--out", tmp_path / "s", "--quiet", "--json")
+    finally:
+        os.umask(old)
     doc = _doc(r)
+    for f in ("s.nc", "s.png"):  # written under umask 022: readable by others (was 0600 before the atomic write's chmod)
+        assert stat.S_IMODE((tmp_path / f).stat().st_mode) == 0o644, f
     assert doc["command"] == "spectrum" and doc["units"]["height"] == "m" and doc["units"]["p"] == "rad/s"
     spec = Spectrum.load(tmp_path / "s.nc")
     assert doc["cells"] == 20 and doc["overturned"] == int(spec.overturned.sum()) and doc["uplifted"] == int(spec.uplifted.sum())
