@@ -156,6 +156,23 @@ def _count(x) -> int | float:
     return int(v) if v == int(v) else v
 
 
+def fragility_rows(ds) -> list[dict]:
+    """A record suite's fragility (`jaxrock.analyses.suite.run_suite`), one row per model and cell
+    (the sweep's fixed quantities, the cell's values, the intensity measure, the median and β with
+    their 5–95 % bootstrap bounds, the outcomes counted): `fragility.csv`'s rows."""
+    cells = [d for d in ds.least_scale.dims if d not in ("model", "record")]
+    fixed = {c: float(ds[c]) for c in ds.coords if ds[c].ndim == 0}
+    rows = []
+    for idx in np.ndindex(*(ds.sizes[d] for d in ("model", *cells))):
+        one = ds.isel(dict(zip(("model", *cells), idx)))
+        (m_lo, m_hi), (b_lo, b_hi) = one.fragility_median_ci.values, one.fragility_beta_ci.values
+        rows.append({"model": str(one.model.values), **fixed, **{d: float(one[d]) for d in cells}, "im": ds.attrs.get("im", ""),
+                     "median": float(one.fragility_median), "median_5": float(m_lo), "median_95": float(m_hi),
+                     "beta": float(one.fragility_beta), "beta_5": float(b_lo), "beta_95": float(b_hi), "n": int(one.fragility_n),
+                     "n_overturned": _count(one.fragility_n_overturned), "n_failed": int(one.fragility_n_failed)})
+    return rows
+
+
 def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
     """Write a record suite (`jaxrock.analyses.suite.run_suite`) into the folder `out`: the dataset
     `suite.zarr` (xarray.open_zarr), `least_scale.csv`, the fragility table `fragility.csv` and
@@ -190,18 +207,13 @@ def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
     files["least_scale"] = write_table(out / "least_scale.csv", rows)
     units = ds.fragility_median.attrs.get("units", "")
     im = ds.attrs.get("im", "")
-    rows, md = [], [f"| model | {' | '.join(cells)} | median {im} [{units}] | 5–95 % | β | 5–95 % | overturned / runs | failed |",
-                    "|---|" + "---|" * len(cells) + "---|---|---|---|---|---|"]
-    for idx in np.ndindex(*(ds.sizes[d] for d in ("model", *cells))):
-        one = ds.isel(dict(zip(("model", *cells), idx)))
-        m, b = float(one.fragility_median), float(one.fragility_beta)
-        (m_lo, m_hi), (b_lo, b_hi) = one.fragility_median_ci.values, one.fragility_beta_ci.values
-        vals = {d: float(one[d]) for d in cells}
-        rows.append({"model": str(one.model.values), **fixed, **vals, "im": im, "median": m, "median_5": float(m_lo), "median_95": float(m_hi),
-                     "beta": b, "beta_5": float(b_lo), "beta_95": float(b_hi), "n": int(one.fragility_n),
-                     "n_overturned": _count(one.fragility_n_overturned), "n_failed": int(one.fragility_n_failed)})
-        md.append(f"| {one.model.values} | " + " | ".join(f"{v:g}" for v in vals.values()) + f" | {m:.4g} | {m_lo:.4g}–{m_hi:.4g} | "
-                  f"{b:.3f} | {b_lo:.3f}–{b_hi:.3f} | {_count(one.fragility_n_overturned):g} / {int(one.fragility_n)} | {int(one.fragility_n_failed)} |")
+    rows = fragility_rows(ds)
+    md = [f"| model | {' | '.join(cells)} | median {im} [{units}] | 5–95 % | β | 5–95 % | overturned / runs | failed |",
+          "|---|" + "---|" * len(cells) + "---|---|---|---|---|---|"]
+    for r in rows:
+        md.append(f"| {r['model']} | " + " | ".join(f"{r[d]:g}" for d in cells) + f" | {r['median']:.4g} | {r['median_5']:.4g}–"
+                  f"{r['median_95']:.4g} | {r['beta']:.3f} | {r['beta_5']:.3f}–{r['beta_95']:.3f} | {r['n_overturned']:g} / {r['n']} | "
+                  f"{r['n_failed']} |")
     files["fragility"] = write_table(out / "fragility.csv", rows)
     note = (f"Lognormal fragility P = Φ(ln(x/θ)/β) by maximum likelihood of every record × factor outcome of the sweep "
             f"(Baker 2015, multiple stripes), x = {im}; intervals: bootstrap over records ({ds.fragility_median_boot.sizes['bootstrap']} "

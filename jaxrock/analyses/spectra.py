@@ -33,8 +33,6 @@ from .suite import least_overturning_scale
 from .sweep import Sweep, run_sweep
 
 
-
-
 class _AbstractSpectrum(eqx.Module):
     """`Spectrum`'s methods (its fields come from `jaxrock.results.SUMMARY`)."""
 
@@ -285,9 +283,8 @@ class RecordSpectrum(eqx.Module):
                 "scale": (("height",), *cf.encode_never(self.scale, {"long_name": "least overturning scale factor", "units": "1"},
                                                        "no factor of the sweep overturns")),
                 "bracket_low": (("height",), self.bracket_low, {"long_name": "largest scale below it that does not overturn", "units": "1"}),
-                **({} if self.uncertain is None else {"uncertain": (("height",), np.asarray(self.uncertain, np.int8), {
-                    "long_name": "a run that decided the least scale has an uncertain verdict (jaxrock.sensitivity)", "units": "1",
-                    "flag_values": np.array([0, 1], np.int8), "flag_meanings": "certain uncertain"})}),
+                **({} if self.uncertain is None else {"uncertain": (("height",), np.asarray(self.uncertain, np.int8), cf.flags(
+                    "a run that decided the least scale has an uncertain verdict (jaxrock.sensitivity)", ("certain", "uncertain")))}),
                 **({} if self.worst_status is None else {"worst_status": (("height",), np.asarray(self.worst_status, np.int32), {
                     "long_name": "largest jaxrock.Status code of the height's runs (0: all ok)"})}),
             },

@@ -34,7 +34,6 @@ app = typer.Typer(
 )
 
 
-
 def in_folder(out: Path, first_file: str, parts: str, kept: str, run):
     """The frame of the commands that fill a folder and resume (reproduce, stability,
     work-precision): `--out` checked writable and held, then `run()`; a signal exits 130 naming

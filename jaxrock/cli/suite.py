@@ -88,7 +88,7 @@ def suite(
     from ..analyses.suite import run_suite
     from ..interrupt import Interrupted
     from ..io import store as zstore
-    from ..reports import suite_files
+    from ..reports import fragility_rows, suite_files
 
     t0 = time.perf_counter()
     try:
@@ -110,19 +110,9 @@ def suite(
     say(uncertain_line(ds.least_scale_uncertain.values if sensitivity else None, ds.uncertain.values, "least factor(s)",
                               ds.least_scale.size))
     say("wrote " + ", ".join(str(p) for p in files.values()))
-    import csv
-
-    def number(text):  # a fragility CSV cell: a number, else its text
-        try:
-            return float(text)
-        except ValueError:
-            return text
-
-    with open(files["fragility"], encoding="utf-8") as fh:
-        fragility = [{k: number(v) for k, v in row.items()} for row in csv.DictReader(fh)]
     report("suite", {"models": kinds, "records": [{"record": str(ds.record.values[r]), "pga": float(ds.pga[r]), "pgv": float(ds.pgv[r]),
                                                     "d5_95": float(ds.d5_95[r])} for r in range(ds.sizes["record"])],
-                     "fragility": fragility,
+                     "fragility": fragility_rows(ds),
                      "status": _status_counts(ds.worst_status.values), "seconds": secs, "files": list(files.values())},
            {"pga": "m/s2", "pgv": "m/s", "d5_95": "s", "seconds": "s"})
     _exit_if_untrusted(_status_counts(ds.worst_status.values), "column(s) × record(s)")
