@@ -13,6 +13,7 @@ from ..scene import DEFAULT_BACKBONE, DEFAULT_SMOOTHING, UNDAMPED
 
 JSON_OPTION = typer.Option(False, "--json", help="print the summary as one JSON document on stdout instead of text (units in its "
                            "'units'; null: never, or not computed); warnings stay on stderr")
+QUIET_OPTION = typer.Option(False, "--quiet", "-q", help="no progress bar")
 FORCE_OPTION = typer.Option(False, "--force", help="let outputs replace existing files that jaxrock did not write "
                             "(without it such a file is refused; symbolic links always are)")
 BACKBONE_DEFAULTS = ", ".join(f"{v} {k}" for k, v in DEFAULT_BACKBONE.items())

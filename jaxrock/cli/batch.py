@@ -11,7 +11,7 @@ from .guards import report, say, EXIT_INTERRUPTED, _exit_if_untrusted, _guarded,
 from ..outputs import OUTPUTS, RESULT_COLUMNS
 from ..scene import PULSES, RECORD_ALIASES, model_kinds, model_params, pulse_params
 from .options import SENSITIVITY_HELP
-from .app import app, FORCE_OPTION, JSON_OPTION
+from .app import QUIET_OPTION, app, FORCE_OPTION, JSON_OPTION
 
 
 @app.command(help=(
@@ -29,7 +29,7 @@ def batch(
     chunk_size: int = typer.Option(256, help="rows per vmapped batch"),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     force: bool = FORCE_OPTION,
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
 ):
     from .._validate import JaxrockInputError, check_writable

@@ -12,7 +12,7 @@ import typer
 from .guards import report, say, EXIT_UNTRUSTED, _guarded, _hold
 from ..scene import TAN_ALPHA
 from .options import _check_count, parse_values
-from .app import app, FORCE_OPTION, JSON_OPTION
+from .app import QUIET_OPTION, app, FORCE_OPTION, JSON_OPTION
 
 
 @app.command()
@@ -21,7 +21,7 @@ def calibrate(
     out: Path = typer.Option(Path("out/calibration"), help="output folder (calibration.csv and the figures)"),
     tan_alpha: Optional[str] = typer.Option(None, help="slenderness values to calibrate at ('0.1,0.2,0.3' or 'a:b:n'; default 0.05:0.35:13)"),
     max_iter: int = typer.Option(300, help="optimiser iterations at most"),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
 ):

@@ -14,7 +14,7 @@ from .guards import (report, say, _estimate, _exit_if_untrusted, _guarded, _hist
 from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, RECORD_ALIASES, builtin_record_names
 from .options import (model_option, ModelKind, _check_refine, _excitation, _integrator, build_model, parse_values, SENSITIVITY_HELP,
                       uncertain_line)
-from .app import TOL_HELP, app, FORCE_OPTION, JSON_OPTION
+from .app import QUIET_OPTION, TOL_HELP, app, FORCE_OPTION, JSON_OPTION
 
 
 @app.command("record-spectrum")
@@ -38,7 +38,7 @@ def record_spectrum(
     out: str = typer.Option("out/record_spectrum", help="output stem: <out>.nc, <out>.csv, <out>.png; a folder (or a path "
                             "ending in /) means <out>/record_spectrum.*"),
     sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h"),

@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from .guards import report, say, _guarded
-from .app import app, FORCE_OPTION, JSON_OPTION, in_folder
+from .app import QUIET_OPTION, app, FORCE_OPTION, JSON_OPTION, in_folder
 
 
 def _steps() -> tuple[str, ...]:
@@ -24,7 +24,7 @@ def reproduce(
     out: Path = typer.Option(Path("out/reproduce"), help="output folder: report.md (verdicts and figures), findings.csv, every "
                              "figure and its data; findings/ keeps each finished step (a rerun resumes)"),
     only: Optional[str] = typer.Option(None, help="comma-separated steps to run (default all): " + ", ".join(_steps())),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
 ):

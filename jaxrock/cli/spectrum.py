@@ -14,7 +14,7 @@ from ..scene import DEFAULT_MODEL, DEFAULT_PULSE, MAX_REFINE
 from .options import (model_option, parse_values, ModelKind, PulseKind, _check_count, _integrator, build_model, spectrum_summary, SENSITIVITY_HELP,
                       check_pulse_params, split_params, with_params)
 from .grammar import DEFAULT_GRID
-from .app import TOL_HELP, app, FORCE_OPTION, JSON_OPTION, RATIO_UNITS, UNDAMPED_HELP
+from .app import QUIET_OPTION, TOL_HELP, app, FORCE_OPTION, JSON_OPTION, RATIO_UNITS, UNDAMPED_HELP
 
 
 @app.command()
@@ -38,7 +38,7 @@ def spectrum(
     tol: Optional[float] = typer.Option(None, help=TOL_HELP),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP + "; off by default on pulses "
                                      "(none of 240 seeded pulse cells changed verdict, benchmarks/study_uncertain.py)"),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a grid estimated beyond 1 h or 2 GB"),

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from .guards import report, say, EXIT_UNTRUSTED, _guarded
-from .app import app, FORCE_OPTION, JSON_OPTION, in_folder
+from .app import QUIET_OPTION, app, FORCE_OPTION, JSON_OPTION, in_folder
 
 
 @app.command()
@@ -16,7 +16,7 @@ def stability(
     quick: bool = typer.Option(False, "--quick", help="the quick matrix: fewer cases, flexible columns of 4 elements (about 1 min)"),
     out: Path = typer.Option(Path("out/stability"), help="output folder: stability.md, stability.csv, stability.png; "
                              "stability_cases/ keeps each finished case (a rerun resumes)"),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
 ):

@@ -15,7 +15,7 @@ from .guards import (report, say, EXIT_INTERRUPTED, _estimate, _exit_if_untruste
 from ..scene import BUILTIN_SUITE, MAX_ENSEMBLE, RECORD_ALIASES, builtin_record_names
 from .options import model_option, _check_count, _check_refine, parse_values, SENSITIVITY_HELP, LIST_HELP as _LIST, uncertain_line
 from .grammar import flag_of
-from .app import app, FORCE_OPTION, JSON_OPTION
+from .app import QUIET_OPTION, app, FORCE_OPTION, JSON_OPTION
 
 
 @app.command()
@@ -39,7 +39,7 @@ def suite(
     sensitivity: bool = typer.Option(True, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
     ensemble: int = typer.Option(0, help=f"replace each uncertain verdict by the fraction of this many runs at its factor x (1 ± 1e-7) "
                                  f"that overturn, and fit the fragility on those fractions (0 to {MAX_ENSEMBLE}; 0: the verdicts)"),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a suite estimated beyond 1 h"),

@@ -18,7 +18,7 @@ from ..scene import (BUILTIN_SUITE, DEFAULT_MODEL, DEFAULT_PULSE, builtin_record
 from .options import (model_option, BackboneKind, ModelKind, PulseKind, _check_count, _integrator, parse_values, SENSITIVITY_HELP, LIST_HELP as
                       _LIST, check_pulse_params, uncertain_line, with_params)
 from .grammar import flag_of
-from .app import TOL_HELP, app, BACKBONE_DEFAULTS, JSON_OPTION
+from .app import QUIET_OPTION, TOL_HELP, app, BACKBONE_DEFAULTS, JSON_OPTION
 
 
 @app.command()
@@ -48,7 +48,7 @@ def sweep(
                                             "task of its workers, which write into --out (a folder they all see); needs "
                                             "jaxrock[distributed]"),
     sensitivity: bool = typer.Option(False, "--sensitivity/--no-sensitivity", help=SENSITIVITY_HELP),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
     yes: bool = typer.Option(False, "--yes", help="run a sweep estimated beyond 1 h or 2 GB"),
     **params: Optional[str],

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from .guards import report, say, _guarded
-from .app import app, FORCE_OPTION, JSON_OPTION, in_folder
+from .app import QUIET_OPTION, app, FORCE_OPTION, JSON_OPTION, in_folder
 
 
 @app.command("work-precision")
@@ -16,7 +16,7 @@ def work_precision(
     quick: bool = typer.Option(False, "--quick", help="fewer settings and smaller grids (about 3 min on 2 cores)"),
     out: Path = typer.Option(Path("out/work-precision"), help="output folder: work_precision.png (the diagrams), .md (tables, the "
                              "defaults against the peers), .csv (every point); work_precision_panels/ keeps each finished panel"),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+    quiet: bool = QUIET_OPTION,
     as_json: bool = JSON_OPTION,
     force: bool = FORCE_OPTION,
 ):
