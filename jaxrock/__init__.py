@@ -104,6 +104,10 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
 
 
 def __getattr__(name):
+    if name == "__version__":  # from git tags at install time (`jaxrock.cache.package_version`)
+        from .cache import package_version
+
+        return package_version()
     if name in _EXPORTS:
         value = getattr(_importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
     elif _importlib_util.find_spec(f"{__name__}.{name}") is not None:  # a submodule: jaxrock.scene, jaxrock.cli, ...

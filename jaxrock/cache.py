@@ -40,11 +40,19 @@ def cache_root() -> Path | None:
 
 
 def package_version() -> str:
-    """jaxrock's installed version ("unknown" for a source tree without an install)."""
+    """jaxrock's version, from git tags (setuptools-scm, at build or install time): `0.1.0` at the tag
+    v0.1.0, `0.1.1.devN+g<commit>` N commits after it (`.dYYYYMMDD` added for uncommitted changes);
+    "unknown" for a source tree never installed. An editable install keeps the version of its
+    install: `pip install -e .` again after pulling."""
     try:
-        return metadata.version("jaxrock")
-    except metadata.PackageNotFoundError:  # pragma: no cover
-        return "unknown"
+        from ._version import version
+
+        return version
+    except ImportError:  # pragma: no cover
+        try:
+            return metadata.version("jaxrock")
+        except metadata.PackageNotFoundError:
+            return "unknown"
 
 
 def _versions() -> str:

@@ -11,14 +11,15 @@ ROOT = Path(__file__).resolve().parents[1] / "jaxrock"
 
 # layer of each module (dotted name below jaxrock), highest first; a package's modules share its layer
 LAYERS = [
-    ("front ends", ("cli", "paper", "numerics", "reports", "plotting")),
+    ("front ends", ("cli", "paper", "numerics", "reports", "plotting", "__main__")),
     ("analyses", ("analyses",)),
     ("input/output", ("io",)),
     ("models", ("rigid", "spring", "construct")),
     ("protocol", ("model", "bookkeeping", "sensitivity")),
     ("values", ("geometry", "excitation", "results", "intensity")),
     ("vocabulary", ("scene", "outputs")),  # words and defaults, without JAX
-    ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "cache", "runtime", "__init__")),
+    # _version: written by setuptools-scm at install time
+    ("internals", ("_validate", "_linalg", "_rootfind", "interrupt", "cache", "runtime", "__init__", "_version")),
 ]
 RANK = {name: rank for rank, (_, names) in enumerate(LAYERS) for name in names}
 

@@ -35,6 +35,20 @@ app = typer.Typer(
 )
 
 
+def _print_version(value: bool):
+    if value:
+        from ..cache import package_version
+
+        typer.echo(f"jaxrock {package_version()}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
+                                       help="print jaxrock's version (from git tags: it names the commit) and exit")):
+    """Rocking bodies under earthquakes (Vassiliou, Mackie & Stojadinovic 2014), in JAX (float64)."""
+
+
 def in_folder(out: Path, first_file: str, parts: str, kept: str, run):
     """The frame of the commands that fill a folder and resume (reproduce, stability,
     work-precision): `--out` checked writable and held, then `run()`; a signal exits 130 naming

@@ -50,12 +50,13 @@ class _OneLineErrors(typer.core.TyperGroup):
             if not standalone_mode:
                 raise
             ctx = getattr(e, "ctx", None)
-            if type(e).__name__ == "NoArgsIsHelpError":  # `jaxrock` alone: the help, as asked
-                typer.echo(e.format_message(), err=True)
+            if type(e).__name__ == "NoArgsIsHelpError":  # `jaxrock` alone: the help on stdout, exit 0 (nothing went wrong)
+                typer.echo(e.format_message())
+                rv = 0
             else:
                 hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
                 typer.echo(f"Error: {e.format_message()}{hint}", err=True)
-            rv = e.exit_code
+                rv = e.exit_code
         if not standalone_mode:
             return rv
         sys.exit(rv if isinstance(rv, int) else 0)

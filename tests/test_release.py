@@ -1,0 +1,65 @@
+"""What a release carries: a version from git tags that names the commit (`jaxrock --version`,
+`jaxrock.__version__`, the provenance of every file), the license pyproject declares, a citation of
+the software and the paper, and the entry points (`jaxrock`, `python -m jaxrock`)."""
+
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PEP440 = re.compile(r"^\d+(\.\d+)*((a|b|rc)\d+)?(\.post\d+)?(\.dev\d+)?(\+[a-z0-9.]+)?$")
+
+
+def _run(*args, cwd=ROOT):
+    return subprocess.run(args, capture_output=True, text=True, cwd=cwd, timeout=120)
+
+
+def test_version_is_the_same_everywhere():
+    import jaxrock
+    from jaxrock.cache import package_version
+
+    version = package_version()
+    assert PEP440.match(version), version
+    assert jaxrock.__version__ == version
+    r = _run(sys.executable, "-m", "jaxrock", "--version")
+    assert r.returncode == 0 and r.stdout.strip() == f"jaxrock {version}", r
+
+
+@pytest.mark.skipif(not (ROOT / ".git").exists() or shutil.which("git") is None, reason="a source tree without git history")
+def test_each_commit_after_a_tag_has_its_own_version(tmp_path):
+    """setuptools-scm's version of the checkout, of a commit after it, and of a tag: three versions,
+    the tag's plain. (The installed `jaxrock --version` is this version at install time.)"""
+    setuptools_scm = pytest.importorskip("setuptools_scm")
+    clone = tmp_path / "clone"
+    assert _run("git", "clone", "-q", "--no-checkout", str(ROOT), str(clone)).returncode == 0
+    env = ["-c", "user.name=t", "-c", "user.email=t@example.org"]
+    first = setuptools_scm.get_version(root=str(clone))
+    assert _run("git", *env, "commit", "-q", "--allow-empty", "-m", "next", cwd=clone).returncode == 0
+    second = setuptools_scm.get_version(root=str(clone))
+    assert _run("git", *env, "tag", "-a", "v9.8.7", "-m", "a release", cwd=clone).returncode == 0
+    tagged = setuptools_scm.get_version(root=str(clone))
+    assert first != second and PEP440.match(first) and PEP440.match(second), (first, second)
+    assert tagged == "9.8.7"
+
+
+def test_plain_jaxrock_prints_help_and_exits_0():
+    r = _run(sys.executable, "-m", "jaxrock")
+    assert r.returncode == 0, r
+    assert r.stdout.startswith("Usage: ") and "spectrum" in r.stdout and "--version" in r.stdout
+
+
+def test_license_citation_and_metadata_agree():
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    assert meta["license"] == "MIT" and (ROOT / "LICENSE").read_text(encoding="utf-8").startswith("MIT License")
+    assert (ROOT / "jaxrock" / "py.typed").exists() and "Typing :: Typed" in meta["classifiers"]
+    cff = (ROOT / "CITATION.cff").read_text(encoding="utf-8")
+    assert "license: MIT" in cff and "doi: 10.1002/eqe.2406" in cff  # the software, and the paper it implements
+    changelog = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    assert "## [Unreleased]" in changelog
+    released = re.findall(r"^## \[(\d+\.\d+\.\d+)\]", changelog, flags=re.M)
+    assert released and re.search(rf"^version: {re.escape(released[0])}$", cff, flags=re.M), "CITATION.cff cites the latest release"
