@@ -58,11 +58,37 @@ def calibration_report(
     progress: bool = True,
     max_iter: int = 300,
 ) -> CalibrationReport:
-    """Calibrate c̄ over tanα ∈ [0.05, 0.35] (default 13 values), fit c̄ = k (α/0.1)^n, and write
-    to `out_dir`: `calibration.csv` (tanα, α, target r², calibrated c̄, eq. 17 c̄, residual, …),
-    `fig07_energy_ratio.png` (r_eq² against θ₀/α for tanα = 0.1, 0.2, 0.3 and c̄ = 0.02, 0.08,
-    0.18, RM r² levels as horizontal lines) and `calibration_cbar.png`. Returns the data
-    (`CalibrationReport.format_table()` gives the printable table)."""
+    """Calibrate c̄ over a range of tanα, fit c̄ = k (α/0.1)^n, and write the table and figures.
+
+    Written to `out_dir`: `calibration.csv` (tanα, α, target r², calibrated c̄, eq. 17 c̄, residual,
+    …), `fig07_energy_ratio.png` (r_eq² against θ₀/α for tanα = 0.1, 0.2, 0.3 and c̄ = 0.02, 0.08,
+    0.18, RM r² levels as horizontal lines) and `calibration_cbar.png`. Imports matplotlib.
+
+    Arguments:
+        out_dir (str | os.PathLike): the output folder, made if missing; default "out".
+        tan_alphas (ArrayLike | None): the slendernesses tanα, each in (0, 1); default None: 13 values
+            over [0.05, 0.35].
+        theta0_over_alpha (Sequence[float]): the calibration angles θ₀/α, each in (0, 1); default
+            `CALIBRATION_ANGLES`.
+        family: the spring models calibrated (`SpringFamily`); default None: `SpringFamily()`.
+        fig7_theta0_over_alpha (ArrayLike | None): the θ₀/α of figure 7; default None: 32 values over
+            [0.05, 0.98].
+        progress: show progress bars; default True.
+        max_iter: the calibration's most iterations (`calibrate_cbar`), ≥ 1; default 300.
+
+    Returns:
+        The data (`CalibrationReport`; `format_table()` gives the printable table).
+
+    Raises:
+        JaxrockInputError: as `calibrate_cbar` raises it (a tanα or θ₀/α outside (0, 1), `max_iter` < 1).
+
+    Example:
+        ```python
+        import jaxrock
+        report = jaxrock.calibration_report("out", tan_alphas=[0.1, 0.2, 0.3])
+        print(report.format_table())
+        ```
+    """
     family = SpringFamily() if family is None else family
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -52,15 +52,17 @@ def margin(solution: Solution):
 
 
 class Boundary(eqx.Module):
-    """The result of `find_boundary`.
+    """The result of `find_boundary`: an overturning boundary along one parameter, bracketed.
 
-    - `value`: the surviving end of the final bracket, the boundary to within `width`;
-    - `overturning`: the bracket's other end (the run there overturns);
-    - `width`: |value − overturning|;
-    - `n_runs`: simulations taken; `iterates`: the x of each, in order;
-    - `converged`: the bracket is within `tol`;
-    - `status`: "ok", or the name of the first other status a run ended with (`STATUS_NAMES`;
-      the search stops there, `converged` False).
+    Attributes:
+        value: the surviving end of the final bracket, the boundary to within `width` (in x's unit).
+        overturning: the bracket's other end (the run there overturns).
+        width: |value − overturning|.
+        n_runs: simulations taken.
+        iterates: the x of each simulation, in order.
+        converged: the bracket is within `tol`.
+        status: "ok", or the name of the first other status a run ended with (`STATUS_NAMES`; the
+            search stops there, `converged` False).
     """
 
     value: float
@@ -73,12 +75,36 @@ class Boundary(eqx.Module):
 
 
 def find_boundary(run, overturns_at, survives_at, *, tol: float = 1e-4, max_runs: int = 60) -> Boundary:
-    """The boundary between `overturns_at` and `survives_at` along the scalar parameter of `run`
-    (x ↦ `Solution`), by safeguarded Newton on a power of `margin` (module docstring).
+    """The overturning boundary along the scalar parameter of `run`, by safeguarded Newton.
 
-    `run(overturns_at)` must overturn and `run(survives_at)` survive, else a `JaxrockInputError`;
-    either order of the two ends along x is fine. `tol`: the bracket width at which the search stops
-    (absolute, in x). A run on a host loop: one simulation per iteration, not vmappable."""
+    Newton on a power of the margin m = 1 − max|θ|/α′ (`margin`), kept inside the bracket between
+    `overturns_at` and `survives_at` (module docstring, `jaxrock.analyses.boundary`); either order
+    of the two ends along x is fine. A run on a host loop: one simulation per iteration, not vmappable.
+
+    Arguments:
+        run (Callable[[float], Solution]): x ↦ the `Solution` of the scene at parameter x.
+        overturns_at (float): a finite x at which the run overturns.
+        survives_at (float): a finite x, other than `overturns_at`, at which the run survives.
+        tol: the bracket width at which the search stops (absolute, in x), > 0; default 1e-4.
+        max_runs: the most simulations; default 60.
+
+    Returns:
+        The bracketed boundary (`Boundary`).
+
+    Raises:
+        JaxrockInputError: when the ends are not two different finite values, `tol` ≤ 0, or
+            `run(overturns_at)` does not overturn or `run(survives_at)` does not survive.
+
+    Example:
+        ```python
+        import jaxrock
+        block = jaxrock.Block.from_slenderness(10.0, 0.2)
+        model = jaxrock.RigidModel(block)
+        run = lambda a: jaxrock.simulate(model, jaxrock.RickerPulse(a * 9.81 * 0.2, 2 * float(block.p)))
+        b = jaxrock.find_boundary(run, overturns_at=8.0, survives_at=1.0)
+        b.value  # the boundary in a_p/(g tanα), to within b.width
+        ```
+    """
     if not (np.isfinite(overturns_at) and np.isfinite(survives_at)) or overturns_at == survives_at:
         raise JaxrockInputError(f"find_boundary: overturns_at = {overturns_at}, survives_at = {survives_at}; "
                                 "valid: two different finite values")
@@ -122,11 +148,28 @@ def find_boundary(run, overturns_at, survives_at, *, tol: float = 1e-4, max_runs
 
 
 def boundary_slope(run, x_star, params, step) -> tuple[Array, Array]:
-    """(dx*/dp, max|θ|/α′ there): the implicit derivative of the boundary x*(p) of `run`
-    ((x, p) ↦ `Solution`) in the parameters `p` (a scalar or an array), from the partials of
-    `margin` at x* − `step` (`step` signed, so that x* − step survives; e.g. a bisection's last
-    bracket). The returned peak should be close to 1: where it is not, the boundary is a jump of the
-    outcome (not a limit of surviving runs) and the slope means nothing. Traceable (`jax.vmap`)."""
+    """The implicit derivative dx*/dp of an overturning boundary x*(p) in the parameters p.
+
+    From the partials of `margin` at x* − `step`. The returned peak should be close to 1: where it is
+    not, the boundary is a jump of the outcome (not a limit of surviving runs) and the slope means
+    nothing. Traceable (`jax.vmap`).
+
+    Arguments:
+        run (Callable[[Array, Array], Solution]): (x, p) ↦ the `Solution` of the scene.
+        x_star (float | Array): the boundary x* (e.g. `Boundary.value`).
+        params (float | Array): the parameters p (a scalar or an array).
+        step (float | Array): signed, so that x* − step survives (e.g. a bisection's last bracket:
+            x* = `Boundary.overturning`, step = `Boundary.overturning − Boundary.value`).
+
+    Returns:
+        (dx*/dp, max|θ|/α′ at x* − step): the slope, shaped like `params`, and the peak.
+
+    Example:
+        ```python
+        b = jaxrock.find_boundary(lambda a: run(a, p0), 8.0, 1.0)
+        slope, peak = jaxrock.boundary_slope(run, b.overturning, p0, b.overturning - b.value)
+        ```
+    """
     x = jnp.asarray(x_star, dtype=float) - step
 
     def margin_and_peak(y, q):

@@ -73,18 +73,26 @@ def _targets(family, tan_alphas):
 
 
 class CalibrationResult(eqx.Module):
-    """Calibrated dampers for a batch of slendernesses (arrays over α unless stated).
+    """Calibrated dampers for a batch of slendernesses: the result of `calibrate_cbar`.
 
-    - `tan_alpha`, `alpha` [rad] (α′ of the base for an extended base: `alpha` is the rocking α′);
-    - `cbar`: calibrated c̄; `cbar_eq17`: eq. 17 at the same α′;
-    - `target`: the RM's r² = η′⁴;
-    - `theta0_over_alpha` (n_θ): the calibration angles; `r2` (n_α, n_θ): r_eq² there at `cbar`;
-    - `residual`: RMS over the angles of r_eq² − target (what no single c̄ can remove: r_eq² varies
-      with θ₀/α); `bias`: their mean;
-    - `step`: the Gauss–Newton estimate of the remaining distance to the least-squares optimum,
-      |Δ log c̄| (the stopping measure);
-    - `iterations`: Adam iterations until this α met the stopping rule (or `max_iter`);
-      `converged`: it met it; `loss_history` (n_iter, n_α).
+    Arrays over α (n_α) unless stated.
+
+    Attributes:
+        tan_alpha: the slendernesses tanα [–].
+        alpha: the rocking α′ [rad] (α′ of the base for an extended base).
+        cbar: the calibrated c̄ [–].
+        cbar_eq17: eq. 17 at the same α′ [–].
+        target: the RM's r² = η′⁴ [–].
+        theta0_over_alpha: the calibration angles θ₀/α [–] (n_θ).
+        r2: r_eq² at the calibration angles at `cbar` [–] (n_α, n_θ).
+        residual: RMS over the angles of r_eq² − target (what no single c̄ can remove: r_eq² varies
+            with θ₀/α).
+        bias: the mean over the angles of r_eq² − target.
+        step: the Gauss–Newton estimate of the remaining distance to the least-squares optimum,
+            |Δ log c̄| (the stopping measure).
+        iterations: Adam iterations until this α met the stopping rule (or `max_iter`).
+        converged: whether this α met the stopping rule.
+        loss_history: the mean squared residual per iteration (n_iter, n_α).
     """
 
     tan_alpha: Float[Array, " a"]
@@ -133,6 +141,35 @@ def calibrate_cbar(
     when every α has stopped, or after `max_iter` iterations (`converged` False for those that
     had not). Residual thresholds on r_eq² − η′⁴ itself cannot be used: r_eq² depends on θ₀/α,
     so the optimum residual is not zero (`residual` reports it).
+
+    Arguments:
+        tan_alphas (float | ArrayLike): the slendernesses tanα [–], each in (0, 1).
+        theta0_over_alpha (Sequence[float] | ArrayLike): the initial angles θ₀/α [–], each in (0, 1);
+            default `CALIBRATION_ANGLES` (0.5, 0.6, 0.7, 0.8, 0.9, 0.95).
+        family: the spring models calibrated (`SpringFamily`: height, base, column, backbone, ...);
+            default None: `SpringFamily()`, the quasi-rigid one-DOF model.
+        integrator: the integrator; default None: the calibration's (explicit Tsit5 for the
+            quasi-rigid model, the ESDIRK `SpringIntegrator` for flexible columns).
+        cbar0: the starting c̄ for every α, > 0; default 0.05.
+        learning_rate: Adam's initial learning rate; default 0.1.
+        decay: the learning rate's decay per iteration; default 0.97.
+        max_iter: the most iterations, ≥ 1; default 300.
+        xtol: the stopping rule's Gauss–Newton distance |Δ log c̄|; default 1e-5.
+        progress: show a progress bar; default False.
+
+    Returns:
+        The calibrated c̄ per α, with its residuals and convergence (`CalibrationResult`).
+
+    Raises:
+        JaxrockInputError: when a tanα or θ₀/α is outside (0, 1), `cbar0` ≤ 0, or `max_iter` < 1.
+
+    Example:
+        ```python
+        import jaxrock
+        res = jaxrock.calibrate_cbar([0.1, 0.2, 0.3])
+        res.cbar, res.cbar_eq17  # calibrated against the paper's eq. 17
+        fit = jaxrock.fit_power_law(res.alpha, res.cbar)
+        ```
     """
     family = SpringFamily() if family is None else family
     integrator = default_integrator(family) if integrator is None else integrator
@@ -238,7 +275,29 @@ class PowerLawFit:
 
 
 def fit_power_law(alpha, cbar, alpha_ref: float = 0.1) -> PowerLawFit:
-    """Least-squares fit of log c̄ = log k + n log(α/α_ref)."""
+    """Fit the power law c̄ = k (α/α_ref)^n to calibrated dampers by least squares in log space.
+
+    log c̄ = log k + n log(α/α_ref); points with a non-finite or non-positive α or c̄ are left out.
+    The paper's eq. 17 is k = 0.02, n = 2.
+
+    Arguments:
+        alpha (ArrayLike): the slenderness angles α [rad] (e.g. `CalibrationResult.alpha`).
+        cbar (ArrayLike): the damper coefficients c̄ [–], one per α.
+        alpha_ref: the reference angle α_ref [rad]; default 0.1.
+
+    Returns:
+        The fit (`PowerLawFit`: `k`, `n`, their standard errors `k_se`, `n_se`, the covariance `cov`
+            of (log k, n), the RMS residual `rms_log` in log c̄; callable as α ↦ c̄).
+
+    Raises:
+        JaxrockInputError: when fewer than 3 valid points remain.
+
+    Example:
+        ```python
+        fit = jaxrock.fit_power_law([0.1, 0.2, 0.3], [0.02, 0.08, 0.18])
+        print(fit)  # c̄ = (0.0200 ± ...) (α/0.1)^(2.000 ± ...)
+        ```
+    """
     a = np.asarray(alpha, dtype=float).ravel()
     c = np.asarray(cbar, dtype=float).ravel()
     keep = np.isfinite(a) & np.isfinite(c) & (a > 0) & (c > 0)

@@ -400,8 +400,8 @@ def run_batch(
     devices=None,
     sensitivity: bool = False,
 ) -> Solution:
-    """Summaries of a batch of scenes: `excitations` has a leading batch axis on every array leaf,
-    and so does `model` when `model_batched` (one model per scene; else one model for all).
+    """Summaries of a batch of scenes, one per excitation (and model).
+
     Driven through the model's `AbstractStepper`: in passes with the running cells gathered between
     them when its `schedule` has passes, else as one vmapped `solve`. A scene with a parameter
     outside its limits comes back `Status.invalid_input` with NaN numbers, as from `simulate`.
@@ -415,9 +415,35 @@ def run_batch(
     tolerance (`root_tol`, 1e-13 s). Issue 52's hostile-input campaign saw 2.4e-12 at most in θ/α
     and in t_overturn [s]; `tests/test_batch.py` holds them to 1e-10.
 
-    `sensitivity=True`: each run carries the tangent of its motion along the excitation's log-scale
-    and reports `Solution.sensitivity` (`jaxrock.sensitivity`; forward mode: without `integrator`,
-    the model's forward-mode default)."""
+    Arguments:
+        model: the model, one for all scenes, or with a leading batch axis on every array leaf when
+            `model_batched`.
+        excitations: the excitations, with a leading batch axis on every array leaf (e.g. a
+            `jax.vmap`ped constructor).
+        integrator: the integrator; default None: the model's `default_integrator()`.
+        model_batched: `model` holds one model per scene; default False.
+        devices (Sequence[jax.Device] | None): the devices the passes are sharded over; default None:
+            `mesh_of`'s (every local accelerator, or the first CPU device).
+        sensitivity: each run carries the tangent of its motion along the excitation's log-scale and
+            reports `Solution.sensitivity` (`jaxrock.sensitivity`; forward mode: without `integrator`,
+            the model's forward-mode default); default False.
+
+    Returns:
+        The summaries (`Solution`), each field with the leading batch axis.
+
+    Raises:
+        JaxrockInputError: when an array leaf lacks the leading batch axis, the batch sizes differ, or
+            `sensitivity` is asked of a reverse-mode integrator.
+
+    Example:
+        ```python
+        import jax, jax.numpy as jnp, jaxrock
+        model = jaxrock.RigidModel(jaxrock.Block.from_slenderness(10.0, 0.2))
+        pulses = jax.vmap(jaxrock.RickerPulse)(jnp.linspace(1.0, 5.0, 64), jnp.full(64, 3.0))
+        sol = jaxrock.run_batch(model, pulses)
+        sol.overturned  # one flag per pulse
+        ```
+    """
     integ = forward_integrator(model, integrator) if sensitivity else model.default_integrator() if integrator is None else integrator
     _check_batch_sizes(model, excitations, model_batched)
     model, excitations, ok = _guard(model, excitations, model_batched)

@@ -82,19 +82,41 @@ def _fit_weighted(lnx: np.ndarray, y: np.ndarray, w: np.ndarray, iterations: int
 
 
 def fit_lognormal(im, overturned, group=None, *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
-    """The lognormal fragility (module docstring) of the observations `im` (intensities > 0) and
-    `overturned` (bools, or probabilities in [0, 1]: an observation whose verdict is uncertain
-    enters as the fraction q of an ensemble of perturbed runs that overturned, i.e. q of an
-    overturning and 1 − q of a standing observation in the binomial likelihood), with a bootstrap
-    over `group` (the record of each observation; None: each observation its own). Returns a dict:
+    """Fit a lognormal fragility curve P(overturn | IM = x) = Φ(ln(x/θ)/β) to overturning outcomes.
 
-    - `median` θ and `beta` β of the fit of all observations;
-    - `median_boot`, `beta_boot`: the `n_boot` bootstrap fits (seeded by `seed`: the same bits every run);
-    - `median_ci`, `beta_ci`: their 5–95 % percentiles;
-    - `n`: the observations, `n_overturned`: those that overturned (the sum of the probabilities).
+    Maximum likelihood on binary outcomes (Baker 2015; module docstring, `jaxrock.analyses.fragility`),
+    by Newton's method on the probit regression on ln x, with a bootstrap over `group` for the
+    uncertainty. An observation whose verdict is uncertain enters as the fraction q of an ensemble
+    of perturbed runs that overturned, i.e. q of an overturning and 1 − q of a standing observation
+    in the binomial likelihood. Outcomes that one intensity separates exactly report β = `BETA_MIN`.
+    Outcomes all alike (none or every one overturned) have no fit: θ and β are NaN then, and so is a
+    bootstrap sample's fit that is all alike.
 
-    Outcomes all alike (none or every one overturned) have no fit: θ and β are NaN then, and so is
-    a bootstrap sample's fit that is all alike."""
+    Arguments:
+        im (ArrayLike): the observations' intensities x (any unit, e.g. PGA [m/s²]), each finite and > 0.
+        overturned (ArrayLike): one outcome per intensity: bools, or probabilities in [0, 1].
+        group (ArrayLike | None): the record of each observation, the bootstrap's unit; default None:
+            each observation its own.
+        n_boot: bootstrap resamplings; default `N_BOOT`.
+        seed: the bootstrap's seed (the same bits every run); default 0.
+
+    Returns:
+        `median` θ and `beta` β of the fit of all observations; `median_boot`, `beta_boot`: the `n_boot`
+            bootstrap fits; `median_ci`, `beta_ci`: their 5–95 % percentiles; `n`: the observations;
+            `n_overturned`: those that overturned (the sum of the probabilities).
+
+    Raises:
+        JaxrockInputError: when `im` and `overturned` differ in size, an intensity is not finite and
+            > 0, an outcome is neither a bool nor in [0, 1], or `group` differs in size.
+
+    Example:
+        ```python
+        import numpy as np, jaxrock
+        im = np.array([0.5, 1.0, 1.5, 2.0, 2.5, 3.0])
+        fit = jaxrock.fit_lognormal(im, [False, False, True, False, True, True], n_boot=200)
+        fit["median"], fit["beta"], fit["median_ci"]
+        ```
+    """
     x = np.asarray(im, dtype=float).ravel()
     q = np.asarray(overturned).ravel().astype(float)
     if x.shape != q.shape:

@@ -70,15 +70,43 @@ def _description(scenes: Scenes) -> dict[str, str]:
 
 def run_scenes(scenes_path, results_path, *, resume: bool = False, chunk_size: int = 256, progress: bool = True,
                force: bool = False, sensitivity: bool = False) -> BatchReport:
-    """Run every scene of `scenes_path` and write `results_path` (see the module docstring).
+    """Run every scene of a scenes file and write the results file.
 
-    All rows are checked first (a `JaxrockInputError` names a bad row and its column).
-    Results are appended per chunk; with `resume`, rows already in `results_path` are skipped,
-    once `<results>.made_by.json` shows they were made by this package version from the same
-    record contents (else a `JaxrockInputError` names the difference). An existing file without
-    that description beside it is not a results file of a batch run: it is overwritten only with
-    `force`. `sensitivity`: every run reports its sensitivity and whether its verdict is uncertain
-    (`jaxrock.sensitivity`; else those columns read NaN and 0).
+    All rows are checked first (`read_scenes`). Rows of the same structure are stacked and run by
+    the batch engine in chunks of `chunk_size` rows padded to a power of two ≥ 8, in order of their
+    intensity (module docstring, `jaxrock.analyses.scenes`). Results are appended per chunk (an
+    interrupted run keeps its finished rows) and rewritten in row order at the end. With `resume`,
+    rows already in the results file are skipped, once `<results>.made_by.json` shows they were made
+    by this package version from the same record contents. An existing file without that
+    description beside it is not a results file of a batch run: it is overwritten only with `force`.
+
+    Arguments:
+        scenes_path (str | os.PathLike): the scenes CSV file (`read_scenes`).
+        results_path (str | os.PathLike): the results CSV file, or a folder (or a path ending with a
+            separator) to hold `<scenes stem>_results.csv`.
+        resume: skip the rows already in the results file; default False.
+        chunk_size: rows per vmapped chunk, an integer ≥ 1; default 256.
+        progress: show a progress bar; default True.
+        force: overwrite an existing file that is not a batch run's results file; default False.
+        sensitivity: every run reports its sensitivity and whether its verdict is uncertain
+            (`jaxrock.sensitivity`; else those columns read NaN and 0); default False.
+
+    Returns:
+        What was done (`BatchReport`): rows, rows run and skipped, groups, seconds, counts of each
+            status and flag, and the results path.
+
+    Raises:
+        JaxrockInputError: at a bad row (naming it and its column); when `chunk_size` < 1, the results
+            file is the scenes file, a scenes column is named like a result column, an existing file
+            is not a batch run's results (without `force`), or on `resume` the results were made
+            otherwise (naming the difference).
+
+    Example:
+        ```python
+        import jaxrock
+        report = jaxrock.run_scenes("scenes.csv", "results.csv", resume=True)
+        report.status_counts  # e.g. {"ok": 120}
+        ```
     """
     if int(chunk_size) < 1:
         raise JaxrockInputError(f"chunk_size = {chunk_size}; valid: an integer >= 1")

@@ -86,7 +86,14 @@ class _AbstractSpectrum(eqx.Module):
                          f"{self.attrs.get('pulse', 'pulse')}")
 
     def save(self, path) -> Path:
-        """Write a netCDF file (readable by xarray, netCDF tools and `Spectrum.load`)."""
+        """Write the spectrum to a netCDF file (readable by xarray, netCDF tools and `Spectrum.load`).
+
+        Arguments:
+            path (str | os.PathLike): the file; its folder is made if missing.
+
+        Returns:
+            The path written.
+        """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         ds = self.to_xarray()
@@ -94,8 +101,18 @@ class _AbstractSpectrum(eqx.Module):
 
     @classmethod
     def load(cls, path) -> "Spectrum":
-        """A spectrum written by `save`; a file without one of today's summary outputs (written by
-        an older jaxrock) is refused, naming what it lacks."""
+        """Read a spectrum written by `save`.
+
+        Arguments:
+            path (str | os.PathLike): the netCDF file.
+
+        Returns:
+            The `Spectrum`.
+
+        Raises:
+            JaxrockInputError: when the file lacks one of today's summary outputs or `status`
+                (written by an older jaxrock), naming what it lacks.
+        """
         import xarray as xr
 
         with xr.open_dataset(path, engine="scipy") as ds:
@@ -138,6 +155,43 @@ Spectrum = schema_module(
     {"uplift_line": None, "overturn_line": None},
     __name__,
 )
+"""A labelled overturning spectrum: every summary output over a grid of pulse ratios.
+
+An `eqx.Module` whose output fields are generated from the summary outputs
+(`jaxrock.results.SUMMARY`), each an array of the grid's shape (len(accel_ratio), len(omega_ratio)).
+`max_theta[i, j]` is max |θ|/α′ at `accel_ratio[i]` = a_p/(g tanα′) and `omega_ratio[j]` = ω_p/p′ (the
+threshold value, 1 by default, where the body overturns). Made by `overturning_spectrum`, written by
+`Spectrum.save` and read back by `Spectrum.load`; `spec.ok` says whether every cell's status is ok,
+`uplift_boundary` and `overturn_boundary` give the least a_p/(g tanα′) that uplifts (overturns) per
+ω_p/p′ column, `contradictions()` the cells whose result contradicts its own flags, `to_xarray()`
+the spectrum as an `xarray.Dataset`.
+
+Attributes:
+    omega_ratio: the grid's ω_p/p′ values [–], 1-D.
+    accel_ratio: the grid's a_p/(g tanα′) values [–], 1-D.
+    max_theta: max |θ|/α′ per cell [–] (the threshold where the body overturns).
+    overturned: whether the cell's body overturned.
+    t_overturn: time of overturning [s] (+inf: did not overturn).
+    uplifted: whether the cell's body left its rest state.
+    t_uplift: first time |θ| passed the uplift rotation [s] (+inf: never).
+    n_impacts: impacts at θ = 0 (the rigid model's; 0 for spring models).
+    sensitivity: max |∂θ/∂ln(scale)|/α′ [–] (`jaxrock.sensitivity`; NaN: not computed).
+    uncertain: whether the cell's overturning verdict is uncertain (False where not computed).
+    status: the cells' status codes (`jaxrock.results.STATUS_NAMES`; 0: ok).
+    attrs: what describes the scene (model, α′, p′, pulse, ...), written into the file.
+    uplift_line: the uplift boundary refined by bisection between grid rows (`refine_boundaries`),
+        per ω_p/p′ column; None: not refined.
+    overturn_line: the overturning boundary refined likewise; None: not refined.
+
+Example:
+    ```python
+    import numpy as np, jaxrock
+    model = jaxrock.RigidModel(jaxrock.Block.from_slenderness(10.0, 0.2))
+    spec = jaxrock.overturning_spectrum(model, np.linspace(1, 10, 32), np.linspace(1, 8, 32))
+    spec.save("spectrum.nc")
+    again = jaxrock.Spectrum.load("spectrum.nc")
+    ```
+"""
 
 
 def overturning_spectrum(
@@ -155,24 +209,52 @@ def overturning_spectrum(
     refine: int = 0,
     sensitivity: bool = False,
 ) -> Spectrum:
-    """max |θ|/α′ of `model` over the grid `accel_ratio` (a_p/(g tanα′)) × `omega_ratio` (ω_p/p′).
+    """The overturning spectrum of `model`: max |θ|/α′ over a grid of pulse ratios.
 
-    - `pulse`: a pulse kind's name (`jaxrock.scene.PULSES`: "symmetric" Ricker, "antisymmetric"
-      eq. 29, "sine" of N cycles) or a pulse class; `pulse_params` its parameters beyond a_p and
-      ω_p (`jaxrock.scene.PULSE_PARAMS`, e.g. {"n_cycles": 2}; None: their defaults).
-    - `batch_size`: the most cells run together in one vmapped batch (memory bound); the grid is
-      split into batches of about the size the batch engine's passes share (`engine.even_batches`),
-      whole rows of ω_p/p′: the chunks of a sweep (`jaxrock.analyses.sweep`), which runs it.
-    - `checkpoint`: the sweep's Zarr store (`jaxrock.io.store`): each finished batch is written
-      into it as its own chunk; rerunning the same call after an interruption resumes from it,
-      and it is removed when the spectrum (with its refinement) is complete, unless
-      `keep_checkpoint` (the caller removes it once the result is saved: the CLI does). It
-      records what made it (`jaxrock.io.provenance`): one of another run (model, parameters,
-      pulse, grid, integrator, version) or an unreadable one is refused with a
-      `JaxrockInputError`, and so is one that another run is writing (`<checkpoint>.lock`).
-    - `refine`: bisections of the uplift and overturning lines between grid rows (0: grid lines).
-    - `sensitivity`: every cell carries its tangent and reports its `sensitivity` and whether its
-      verdict is `uncertain` (`jaxrock.sensitivity`); else those read "not computed" / no.
+    The grid is `accel_ratio` (a_p/(g tanα′)) × `omega_ratio` (ω_p/p′), in which the rigid spectrum
+    depends on α′ only (SPEC "Spectra"). It is run as a sweep (`jaxrock.analyses.sweep`) in batches
+    of about the size the batch engine's passes share (`engine.even_batches`), whole rows of
+    ω_p/p′. A `checkpoint` store records what made it (`jaxrock.io.provenance`).
+
+    Arguments:
+        model: the model (its `block` sets α′, p′).
+        omega_ratio (ArrayLike): ω_p/p′ values [–], non-empty, > 0, strictly increasing.
+        accel_ratio (ArrayLike): a_p/(g tanα′) values [–], non-empty, > 0, strictly increasing.
+        pulse (str | type): a pulse kind's name (`jaxrock.scene.PULSES`: "symmetric" Ricker,
+            "antisymmetric" eq. 29, "sine" of N cycles) or a pulse class; default `DEFAULT_PULSE`
+            ("symmetric").
+        pulse_params: the pulse's parameters beyond a_p and ω_p (`jaxrock.scene.PULSE_PARAMS`, e.g.
+            {"n_cycles": 2}); default None: their defaults.
+        integrator: the integrator; default None: the model's `default_integrator()`.
+        batch_size: the most cells run together in one vmapped batch (memory bound), ≥ 1; default 4096.
+        progress: show a progress bar; default True.
+        checkpoint: the sweep's Zarr store (`jaxrock.io.store`); each finished batch is written into it
+            as its own chunk, and rerunning the same call after an interruption resumes from it.
+            Default None: no checkpoint.
+        keep_checkpoint: keep the checkpoint once the spectrum (with its refinement) is complete;
+            default False: it is removed (the caller that keeps it removes it once the result is
+            saved: the CLI does).
+        refine: bisections of the uplift and overturning lines between grid rows (`refine_boundaries`);
+            default 0: grid lines.
+        sensitivity: every cell carries its tangent and reports its `sensitivity` and whether its
+            verdict is `uncertain` (`jaxrock.sensitivity`); default False: those read "not computed" / no.
+
+    Returns:
+        The `Spectrum`.
+
+    Raises:
+        JaxrockInputError: when a grid is empty, not > 0 or not strictly increasing, `batch_size` < 1,
+            the pulse is unknown, or the checkpoint is of another run (model, parameters, pulse, grid,
+            integrator, version), unreadable, or being written by another run (`<checkpoint>.lock`).
+
+    Example:
+        ```python
+        import numpy as np, jaxrock
+        model = jaxrock.RigidModel(jaxrock.Block.from_slenderness(10.0, 0.2))
+        spec = jaxrock.overturning_spectrum(model, np.linspace(1, 10, 64), np.linspace(1, 8, 64),
+                                            pulse="antisymmetric", refine=8, checkpoint="spec.zarr")
+        spec.overturn_boundary  # least a_p/(g tanα′) that overturns, per ω_p/p′
+        ```
     """
     wr = check_grid("omega_ratio (omega_p/p)", omega_ratio)
     ar = check_grid("accel_ratio (a_p/(g tan alpha))", accel_ratio)
@@ -228,7 +310,24 @@ def refine_boundaries(
     below it; `iterations` bisections of a_p, all columns in one vmapped batch per step, shrink
     it by 2^-iterations. A column whose first grid row already uplifts (overturns) keeps the grid
     value; one with none stays NaN. Overturning is not monotone in a_p: the line found is the
-    least a_p within the bracket, not below it. `pulse`, `pulse_params`: as `overturning_spectrum`'s.
+    least a_p within the bracket, not below it.
+
+    Arguments:
+        model: the model the spectrum was run with.
+        spectrum (Spectrum): the spectrum (`overturning_spectrum`).
+        pulse (str | type): the pulse kind's name or class, as `overturning_spectrum`'s; default
+            `DEFAULT_PULSE` ("symmetric").
+        pulse_params: the pulse's parameters beyond a_p and ω_p; default None: their defaults.
+        iterations: bisections per line; default 12.
+        integrator: the integrator; default None: the model's `default_integrator()`.
+
+    Returns:
+        The spectrum with `uplift_line` and `overturn_line` set.
+
+    Example:
+        ```python
+        spec = jaxrock.refine_boundaries(model, spec, iterations=10)
+        ```
     """
     cls = pulse_class(pulse)
     pp = dict(pulse_params or {})
@@ -259,11 +358,18 @@ def refine_boundaries(
 class RecordSpectrum(eqx.Module):
     """Least scale factor of a record that overturns a body, per body height (paper figure 10).
 
-    `scale[i]` is the least factor of the sweep (refined by bisection to `tolerance`) that
-    overturns the body of height `height[i]`; +inf where no factor of the sweep overturns it.
-    `uncertain[i]`: a run that decided it has an uncertain verdict (`jaxrock.sensitivity`; None:
-    not computed). `worst_status[i]`: the largest `jaxrock.Status` code of the height's runs (0:
-    all ok; None: not known).
+    Made by `record_overturning_scale`; `save` writes it to a netCDF file.
+
+    Attributes:
+        height: the bodies' full heights 2h [m], 1-D.
+        scale: the least factor of the sweep (refined by bisection) that overturns the body of height
+            `height[i]` [–]; +inf where no factor of the sweep overturns it.
+        bracket_low: the largest factor below it that does not overturn [–].
+        attrs: what describes the run (model, record, tanα, tanα′, integrator, ...).
+        uncertain: per height, whether a run that decided it has an uncertain verdict
+            (`jaxrock.sensitivity`); default None: not computed.
+        worst_status: per height, the largest `jaxrock.Status` code of its runs (0: all ok); default
+            None: not known.
     """
 
     height: np.ndarray
@@ -274,6 +380,14 @@ class RecordSpectrum(eqx.Module):
     worst_status: np.ndarray | None = None
 
     def save(self, path) -> Path:
+        """Write the record spectrum to a netCDF file (readable by xarray and netCDF tools).
+
+        Arguments:
+            path (str | os.PathLike): the file; its folder is made if missing.
+
+        Returns:
+            The path written.
+        """
         import xarray as xr
 
         path = Path(path)
@@ -315,8 +429,32 @@ def record_overturning_scale(
     bisections (all heights in one vmapped batch) against the factor before it.
     Overturning is not monotone in the factor: an overturning window narrower than the sweep's
     step, below the first overturning factor found, is missed — refine the sweep to rule it out.
-    `sensitivity`: every run judges its verdict, and `uncertain` says which least factors an
-    uncertain run decided (`jaxrock.sensitivity`).
+
+    Arguments:
+        model: the template model (its slenderness and base slenderness are kept).
+        record: the ground-motion record (`Record`).
+        heights (ArrayLike): full heights 2h [m], non-empty, > 0, strictly increasing.
+        scales (ArrayLike): the factor sweep [–], non-empty, > 0, strictly increasing.
+        refine: bisections of the first overturning factor; default 12.
+        integrator: the integrator; default None: the model's `default_integrator()`.
+        progress: show a progress bar; default True.
+        sensitivity: every run judges its verdict, and `uncertain` says which least factors an
+            uncertain run decided (`jaxrock.sensitivity`); default False.
+
+    Returns:
+        The least factor per height (`RecordSpectrum`).
+
+    Raises:
+        JaxrockInputError: when a grid is empty, not > 0 or not strictly increasing, or `record` is
+            not a `Record`.
+
+    Example:
+        ```python
+        import numpy as np, jaxrock
+        model = jaxrock.RigidModel(jaxrock.Block.from_slenderness(10.0, 0.2))
+        rs = jaxrock.record_overturning_scale(model, jaxrock.el_centro(), [5.0, 10.0, 20.0], np.linspace(0.5, 8, 16))
+        rs.scale  # least overturning factor per height
+        ```
     """
     hs = check_grid("heights (2h) [m]", heights)
     sc = check_grid("scales (record factors)", scales)

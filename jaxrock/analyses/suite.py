@@ -45,9 +45,33 @@ def least_overturning_scale(sweep: Sweep, store=None, *, refine: int = 8, progre
       `least_scale_uncertain`: whether a run that decided the least factor has an uncertain
       verdict (`jaxrock.sensitivity`; computed by a sweep made with `sensitivity=True`).
 
-    `store`, `progress`, `devices`, `history` as `run_sweep`. With a store, each record's finished
-    bisection is kept beside it (`<store>.bisection.npz`, written atomically, with the store's
-    description and `refine`): an interrupted run resumes both."""
+    With a store, each record's finished bisection is kept beside it (`<store>.bisection.npz`,
+    written atomically, with the store's description and `refine`): an interrupted run resumes both.
+
+    Arguments:
+        sweep: a record sweep with a `scale` axis.
+        store (str | os.PathLike | None): a Zarr store folder, as `run_sweep`'s; default None.
+        refine: bisections of each least factor, an integer in [0, `MAX_REFINE`]; default 8.
+        progress: show a progress bar; default True.
+        devices (Sequence[jax.Device] | None): as `run_sweep`'s; default None: every local device.
+        history: the command, for the attributes of a new store; default None.
+
+    Returns:
+        (xarray.Dataset): the sweep's outputs and the least factors described above.
+
+    Raises:
+        JaxrockInputError: when `sweep` is not a record sweep with a `scale` axis, `refine` is out of
+            range, a record has no ground motion, or the store is another sweep's.
+
+    Example:
+        ```python
+        import jaxrock
+        sweep = jaxrock.Sweep.make("rigid", records=jaxrock.read_records("builtin"), height=[5.0, 10.0],
+                                   tan_alpha=0.2, scale=[0.5, 1.0, 2.0, 4.0])
+        ds = jaxrock.least_overturning_scale(sweep, refine=8)
+        ds.least_scale  # per record and height
+        ```
+    """
     from tqdm.auto import tqdm
 
     from .. import interrupt
@@ -167,7 +191,22 @@ def overturning_probability(sweep: Sweep, ds, n: int, devices=None) -> np.ndarra
     its verdict (0 or 1) where certain; where `ds.uncertain` (the sweep's dataset, made with
     `sensitivity=True`), the fraction of an ensemble of `n` runs at the scale × (1 + δ t), t
     equally spaced in [−1, 1] and δ = `PERTURBATION` (the perturbation the flag answers for),
-    that overturn: one batch of vmapped lanes for every uncertain run."""
+    that overturn: one batch of vmapped lanes for every uncertain run.
+
+    Arguments:
+        sweep: the record sweep, made with `sensitivity=True`.
+        ds (xarray.Dataset): the sweep's dataset (`run_sweep` or `least_overturning_scale`).
+        n: runs in each uncertain run's ensemble; < 1: the verdicts as they are.
+        devices (Sequence[jax.Device] | None): default None: every local device.
+
+    Returns:
+        The probabilities in [0, 1], an array over `sweep.dims`.
+
+    Example:
+        ```python
+        p = jaxrock.overturning_probability(sweep, ds, n=16)
+        ```
+    """
     import dataclasses
 
     over = ds.overturned.transpose(*sweep.dims).values.astype(float)

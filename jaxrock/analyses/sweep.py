@@ -57,18 +57,33 @@ DEFAULTS = {"height": 10.0, "tan_alpha": 0.2}  # the rest: the model kind's own 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Sweep:
-    """Every scene of a product of axes (module docstring). Build with `Sweep.make`.
+    """Every scene of a product of axes, run chunk by chunk (module docstring, `jaxrock.analyses.sweep`).
 
-    - `model`: a model kind (`jaxrock.scene.model_kinds()`), or a model value (`overturning_spectrum`
-      runs one); `backbone` the spring backbone name of a spring kind (None: the default);
-    - `axes`: quantity → values (at least one), in `axis_order()`; `fixed`: quantity → one value;
-    - `pulse`: the Ricker pulse kind or class (pulse sweeps), or None with `records` (record sweeps:
-      `axes["record"]` holds their names);
-    - `integrator`: None (the model's default) or an integrator;
-    - `chunk_size`: the most scenes of one chunk;
-    - `sensitivity`: every run carries its tangent and reports its `sensitivity` and `uncertain`
-      flag (`jaxrock.sensitivity`; forward mode: without `integrator`, the model's forward-mode
-      default); else those outputs read "not computed".
+    Build with `Sweep.make`, which checks every value; run with `run_sweep` (or
+    `least_overturning_scale` for a record sweep). A frozen dataclass.
+
+    Arguments:
+        model (str | AbstractModel): a model kind (`jaxrock.scene.model_kinds()`), or a model value
+            (`overturning_spectrum` runs one).
+        axes (dict): quantity → values (at least one), in `axis_order()`.
+        fixed (dict): quantity → one value.
+        pulse (str | Callable | None): the Ricker pulse kind or class (pulse sweeps), or None with
+            `records` (record sweeps: `axes["record"]` holds their names).
+        records (tuple): the records of a record sweep; default ().
+        backbone (str | None): the spring backbone name of a spring kind; default None: the default.
+        integrator (AbstractIntegrator | None): default None: the model's default.
+        chunk_size (int): the most scenes of one chunk; default 1024.
+        sensitivity (bool): every run carries its tangent and reports its `sensitivity` and `uncertain`
+            flag (`jaxrock.sensitivity`; forward mode: without `integrator`, the model's forward-mode
+            default); default False: those outputs read "not computed".
+
+    Example:
+        ```python
+        import jaxrock
+        sweep = jaxrock.Sweep.make("rigid", height=[5.0, 10.0], tan_alpha=0.2,
+                                   accel_ratio=[1.0, 2.0, 4.0], omega_ratio=[2.0, 4.0])
+        ds = jaxrock.run_sweep(sweep, "sweep.zarr")
+        ```
     """
 
     model: "str | AbstractModel"
@@ -89,7 +104,26 @@ class Sweep:
         kind's name or class); record sweeps take `records` (a `jaxrock.Record` or a sequence of
         them) and `scale` (default 1). `model` is a model kind, or a model (a value: every scene
         runs it, resized to `height` if given, at its own slenderness; no other model quantity may
-        be given). Every value is checked here, naming the quantity and its valid range."""
+        be given). Every value is checked here, naming the quantity and its valid range.
+
+        Arguments:
+            model (str | AbstractModel): a model kind or a model value; default "rigid".
+            pulse (str | type | None): a pulse kind's name or class (pulse sweeps); default None.
+            records (Record | Sequence[Record] | None): the records of a record sweep; default None.
+            backbone: the spring backbone name of a spring kind; default None: the kind's default.
+            integrator (AbstractIntegrator | None): default None: the model's default.
+            chunk_size: the most scenes of one chunk; default 1024.
+            sensitivity: every run reports its sensitivity and `uncertain` flag; default False.
+            **quantities (float | Sequence[float]): each quantity of `jaxrock.scene.sweep_quantities()`,
+                one number (fixed) or a sequence (an axis).
+
+        Returns:
+            The checked `Sweep`.
+
+        Raises:
+            JaxrockInputError: when a value is outside its valid range, a quantity is unknown, or a
+                model value is given with model quantities other than `height`.
+        """
         from ..model import AbstractModel
 
         if isinstance(model, AbstractModel):
@@ -409,16 +443,35 @@ def run_sweep(sweep: Sweep, store=None, *, client=None, devices=None, progress: 
               on_chunk: Callable[[int], None] | None = None):
     """Run `sweep` and return its results as an `xarray.Dataset` (dimensions: its axes).
 
-    - `store`: a Zarr store folder (`jaxrock.io.store`): created if missing, else checked
-      (one made by another sweep, or unreadable, is refused with one line) and only its missing
-      chunks run. None: nothing is written and every chunk runs here. `history`: the command, for
-      the attributes of a new store.
-    - `client`: a `dask.distributed.Client`; each missing chunk is a task that writes its own region
-      of the store (a lost worker's chunk is run again by Dask). None: chunks run in this process,
-      sharded over `devices` (None: every local device).
-    - SIGINT / SIGTERM (inside `jaxrock.interrupt.deferred_signals`) stop it after the chunk in
-      progress with `jaxrock.interrupt.Interrupted`; what finished is in the store.
-    - A second run into the same store while one runs is refused (`<store>.lock`).
+    SIGINT / SIGTERM (inside `jaxrock.interrupt.deferred_signals`) stop it after the chunk in progress
+    with `jaxrock.interrupt.Interrupted`; what finished is in the store.
+
+    Arguments:
+        sweep: the sweep (`Sweep.make`).
+        store (str | os.PathLike | None): a Zarr store folder (`jaxrock.io.store`): created if missing,
+            else checked and only its missing chunks run; default None: nothing is written and every
+            chunk runs here.
+        client (dask.distributed.Client | None): each missing chunk is a task that writes its own region
+            of the store (a lost worker's chunk is run again by Dask); default None: chunks run in this
+            process.
+        devices (Sequence[jax.Device] | None): the devices chunks are sharded over; default None:
+            every local device.
+        progress: show a progress bar; default True.
+        history: the command, for the attributes of a new store; default None.
+        on_chunk: called with each finished chunk's index; default None.
+
+    Returns:
+        (xarray.Dataset): the summary outputs and `status` over the sweep's axes.
+
+    Raises:
+        JaxrockInputError: when `client` is given without a store, the store was made by another
+            sweep or is unreadable, or another run is writing into it (`<store>.lock`).
+
+    Example:
+        ```python
+        ds = jaxrock.run_sweep(jaxrock.Sweep.make("rigid", accel_ratio=[1, 2, 4], omega_ratio=[2, 4]))
+        ds.max_theta.sel(accel_ratio=2.0)
+        ```
     """
     from ..io import store as zstore
     from ..io.files import exclusive

@@ -200,8 +200,28 @@ def read_at2(path: str | os.PathLike, *, units: str | None = None, name: str | N
     found on any of the first 12 lines, spelt `NPTS=  4000, DT= .01000 SEC`, `NPTS= 4000 DT= 0.01`,
     `DT= 0.01, NPTS= 4000` or `7997 0.0050 NPTS, DT`. Then exactly NPTS accelerations, any number
     per row, in free or Fortran format (`.6403182E-02`, `0.00630`). Units are read from the header;
-    `units` is used where the header states none (default g) and must agree where it does. `name`
-    defaults to the event line of the classic layout, else the file's stem.
+    `units` is used where the header states none and must agree where it does.
+
+    Arguments:
+        path: the `.AT2` file.
+        units: the acceleration unit where the header states none (g, m/s2, cm/s2 (gal), mm/s2,
+            in/s2, ft/s2, also written m/s/s, m/sec^2, m/s²); default None: g there, the header's elsewhere.
+        name: the record's name; default None: the event line of the classic layout, else the file's stem.
+
+    Returns:
+        The record (`Record`), accelerations in m/s².
+
+    Raises:
+        JaxrockInputError: when the file is missing, unreadable, binary or empty, its header gives no
+            valid NPTS (≥ 2) and DT (> 0), it holds other than NPTS values, a value is not a finite
+            number, or `units` is unknown or disagrees with the header.
+
+    Example:
+        ```python
+        import jaxrock
+        record = jaxrock.read_at2("RSN6_IMPVALL.I_I-ELC180.AT2")
+        record.dt  # the file's DT [s]
+        ```
     """
     source = Path(path)
     lines = _read_lines(source)
@@ -264,7 +284,26 @@ def read_two_column(path: str | os.PathLike, *, units: str = "g", name: str | No
     in/s2, ft/s2): the file cannot say it, so give it when it is not g. Time must be
     strictly increasing and uniform (every step within 1e-6 relative of the median step; the
     record's `dt` is the mean step). Time may start anywhere: the record is shifted so that its first sample
-    is at t = 0. `name` defaults to the file's stem.
+    is at t = 0.
+
+    Arguments:
+        path: the text file.
+        units: the acceleration unit: g, m/s2, cm/s2 (gal), mm/s2, in/s2 or ft/s2 (also written m/s/s,
+            m/sec^2, m/s²); default "g".
+        name: the record's name; default None: the file's stem.
+
+    Returns:
+        The record (`Record`), accelerations in m/s², first sample at t = 0.
+
+    Raises:
+        JaxrockInputError: when the file is missing, unreadable, binary or empty, a line does not hold
+            two finite numbers, time is not strictly increasing and uniform, or `units` is unknown.
+
+    Example:
+        ```python
+        import jaxrock
+        record = jaxrock.read_two_column("station.txt", units="cm/s2", name="station")
+        ```
     """
     source = Path(path)
     return _parse_two_column(_read_lines(source), source, units, name or source.stem)
@@ -273,8 +312,22 @@ def read_two_column(path: str | os.PathLike, *, units: str = "g", name: str | No
 def read_record(path: str | os.PathLike, **kw) -> Record:
     """Read a record file: `.AT2` (any case) with `read_at2`, anything else with `read_two_column`.
 
-    Keyword arguments go to the chosen reader (`name`; `units`: for two-column files the unit,
-    default g; for .AT2 files the unit where the header states none, checked where it does).
+    Arguments:
+        path: the record file.
+        **kw (str): keyword arguments of the chosen reader: `name`; `units` (for two-column files the unit,
+            default g; for .AT2 files the unit where the header states none, checked where it does).
+
+    Returns:
+        The record (`Record`), accelerations in m/s².
+
+    Raises:
+        JaxrockInputError: as the chosen reader raises it (a missing or malformed file, an unknown unit).
+
+    Example:
+        ```python
+        import jaxrock
+        record = jaxrock.read_record("IELC180.AT2")
+        ```
     """
     reader = read_at2 if Path(path).suffix.lower() == ".at2" else read_two_column
     return reader(path, **kw)
@@ -311,14 +364,33 @@ def _list_entries(path: Path) -> list[str]:
 
 
 def read_records(sources, *, units: str | None = None, _lists: tuple[str, ...] = ()) -> list[Record]:
-    """Records for a suite: each source is a record file, a folder (its files ending in one of
-    `RECORD_SUFFIXES`, any case, sorted by name), a list file (`*.list`: one such source per line,
+    """The records of a suite, read from files, folders, list files or packaged records.
+
+    Each source is a record file, a folder (its files ending in one of `RECORD_SUFFIXES`, .at2,
+    .txt, .dat, .csv, any case, sorted by name), a list file (`*.list`: one such source per line,
     relative to the list's folder, `#` comments), a packaged record's name (`builtin_record`) or
     `builtin`, all five packaged records (El Centro first); a file or folder of such a name in the
     working directory is read instead. Files are read by `read_record` and named by their file stem
-    (unique within a folder); `units` as there. A folder without record files, a missing file or
-    two records of one name is refused in one line, as is a list that names itself (directly or
-    through other lists)."""
+    (unique within a folder).
+
+    Arguments:
+        sources (str | os.PathLike | Sequence[str | os.PathLike]): one source or a sequence of them.
+        units: the acceleration unit, as `read_record` takes it; default None: each reader's default.
+
+    Returns:
+        The records (`Record`), in the order of the sources.
+
+    Raises:
+        JaxrockInputError: when a folder holds no record file, a source is neither a file, a folder
+            nor a packaged record, two records share a name, a list names itself (directly or through
+            other lists) or names nothing, or a file is malformed.
+
+    Example:
+        ```python
+        import jaxrock
+        suite = jaxrock.read_records(["builtin", "my_records/"], units="g")
+        ```
+    """
     from ..scene import BUILTIN_SUITE, PACKAGED_RECORDS, RECORD_ALIASES
 
     out: list[Record] = []
@@ -353,9 +425,27 @@ def read_records(sources, *, units: str | None = None, _lists: tuple[str, ...] =
 
 
 def builtin_record(name: str, *, label: str | None = None) -> Record:
-    """A packaged record by name, any case (`jaxrock/data/README.md`: sources and attribution):
-    `elcentro` (El Centro 1940 NS, `el_centro`), `elcentro_peknold`, `arl360`, `b-elc000`,
-    `a-tin000`. Named by its file stem, or `label`."""
+    """A packaged record by name, any case.
+
+    The packaged records (`jaxrock/data/README.md`: sources and attribution): `elcentro`
+    (El Centro 1940 NS, `el_centro`), `elcentro_peknold`, `arl360`, `b-elc000`, `a-tin000`.
+
+    Arguments:
+        name: the packaged record's name, any case.
+        label: the record's name; default None: its file stem.
+
+    Returns:
+        The record (`Record`), accelerations in m/s².
+
+    Raises:
+        JaxrockInputError: when `name` is not a packaged record.
+
+    Example:
+        ```python
+        import jaxrock
+        record = jaxrock.builtin_record("arl360")
+        ```
+    """
     from ..scene import PACKAGED_RECORDS, RECORD_ALIASES
 
     key = name.strip().lower()
@@ -377,6 +467,16 @@ def el_centro() -> Record:
     file `Workshops/OpenSeesDays/IELC180.AT2`, a PEER Strong Motion Database record (processing
     by Pacific Engineering, band-pass HP = 0.2 Hz, LP = 15 Hz). The record itself is public data
     of the US Geological Survey's strong-motion program, as processed for the PEER database.
+
+    Returns:
+        The record (`Record`), named "El Centro 1940 NS".
+
+    Example:
+        ```python
+        import jaxrock
+        block = jaxrock.Block.from_slenderness(10.0, 0.2)
+        sol = jaxrock.simulate(jaxrock.RigidModel(block), jaxrock.el_centro())
+        ```
     """
     resource = resources.files("jaxrock") / "data" / "elcentro_ns_1940.txt"
     lines = _split_lines(resource.read_text(encoding="utf-8"))

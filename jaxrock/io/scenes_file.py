@@ -324,9 +324,31 @@ def _refusal(build) -> str:
 
 
 def read_scenes(path) -> Scenes:
-    """Read and check every row of a scenes CSV (see the module docstring).
+    """Read and check every row of a scenes CSV file.
 
-    Raises `JaxrockInputError` at a bad row, naming the row, the column and the valid range.
+    The file (module docstring, `jaxrock.io.scenes_file`): a header line of case-insensitive column
+    names (a `height` column at least), one scene per row; empty cells mean "default"; blank lines and
+    lines whose first cell starts with `#` are skipped; label columns (`id`, `name`, `label`, `group`,
+    `note`, `notes`, `comment`, `x_...`) are carried through. Every row is checked, a column at a time,
+    before anything runs; rows of the same structure are grouped for one vmapped batch each.
+
+    Arguments:
+        path (str | os.PathLike): the scenes CSV file.
+
+    Returns:
+        The checked rows (`Scenes`), as arrays per parameter and groups of rows.
+
+    Raises:
+        JaxrockInputError: at a bad row, naming the row, the column and the valid range; or when the
+            file is missing, empty, without scenes, or its header repeats a column, names an unknown
+            one or lacks `height`.
+
+    Example:
+        ```python
+        import jaxrock
+        scenes = jaxrock.read_scenes("scenes.csv")
+        len(scenes)  # the number of rows
+        ```
     """
     path = Path(path)
     if not path.exists():

@@ -38,14 +38,32 @@ from .system import FlexibleSystem
 
 
 class Checked(AbstractSpringIntegrator):
-    """`integrator` with its global error estimated by a companion run at `factor` × its
-    tolerances (module docstring): `Status.ok` only where the estimate is ≤ `accuracy` (in max
-    |θ|/α′), else `Status.inaccurate`.
+    """A spring integrator whose runs check their own global error.
 
-    - `integrator`: a `GeneralizedAlpha` or a `SpringIntegrator` (with `rtol`, `atol`);
-    - `accuracy`: the stated global accuracy of max |θ|/α′, in (0, 1);
-    - `factor`: the companion's tolerance over the run's, in [2, 1000] (looser: cheaper, and the
-      estimate conservative where the error follows the tolerance).
+    The global error of `integrator` is estimated by a companion run at `factor` × its tolerances
+    (module docstring, `jaxrock.spring.checked`): the status is `Status.ok` only where the estimate
+    is ≤ `accuracy` (in max |θ|/α′), else `Status.inaccurate`. The flexible spring model's default
+    is `Checked(GeneralizedAlpha(1e-5, 1e-5))`. Constructed from its fields, in this order.
+
+    Attributes:
+        integrator: a `GeneralizedAlpha` or a `SpringIntegrator` (not a `Checked`).
+        accuracy: the stated global accuracy of max |θ|/α′ [-], in (0, 1); default 1e-2.
+        factor: the companion's tolerance over the run's [-], in [2, 1000]; default 10 (looser:
+            cheaper, and the estimate conservative where the error follows the tolerance). `factor`
+            times the integrator's `rtol` and `atol` must stay below 1.
+
+    Raises:
+        JaxrockInputError: when `integrator` is not a spring integrator or is a `Checked`, or
+            `accuracy` or `factor` is outside its range.
+
+    Example:
+        ```python
+        import jaxrock
+        block = jaxrock.Block.from_slenderness(50.0, 0.1)
+        model = jaxrock.SpringModel(block, jaxrock.Column.concrete())
+        integrator = jaxrock.Checked(jaxrock.GeneralizedAlpha(1e-6, 1e-6), accuracy=1e-3)
+        sol = jaxrock.simulate(model, jaxrock.RickerPulse(2.0, 3.0), integrator=integrator)
+        ```
     """
 
     integrator: AbstractSpringIntegrator

@@ -16,27 +16,91 @@ from ..scene import CONCRETE_E, CONCRETE_RHO
 
 
 def cbar_eq17(alpha):
-    """Eq. 17: c̄ = c/(m g^0.5 R^1.5) = 0.02 (α/0.1)² (α in rad)."""
+    """The paper's calibrated damper coefficient c̄ (eq. 17).
+
+    c̄ = c/(m g^0.5 R^1.5) = 0.02 (α/0.1)². The spring models use it with the rocking α′ when no
+    `cbar` is given.
+
+    Arguments:
+        alpha (float | Array): slenderness angle α [rad] (a scalar or an array of any shape).
+
+    Returns:
+        (Array): c̄ [-], an array of the shape of `alpha`.
+
+    Example:
+        ```python
+        import jaxrock
+        jaxrock.cbar_eq17(0.1)  # 0.02
+        ```
+    """
     return 0.02 * (jnp.asarray(alpha, dtype=float) / 0.1) ** 2
 
 
 def first_period_eq21(height, tan_alpha, E, rho):
-    """Eq. 21: first fixed-base period of a solid rectangular column, T₁ = 12.38 sqrt(ρ/E) h/tanα [s],
-    with `height` = 2h [m] as every constructor takes it (2h = 50 m, tanα = 0.1 concrete: 0.893 s).
-    The discretised column's own value, with its added masses, is `SpringModel.first_period`."""
+    """First fixed-base period of a solid rectangular column (eq. 21).
+
+    T₁ = 12.38 sqrt(ρ/E) h/tanα [s], with `height` = 2h as every constructor takes it (2h = 50 m,
+    tanα = 0.1, concrete: 0.893 s). The discretised column's own value, with its added masses, is
+    `FlexibleSpringModel.first_period`.
+
+    Arguments:
+        height (float | Array): full column height 2h [m].
+        tan_alpha (float | Array): slenderness tanα = b/h [-].
+        E (float | Array): Young's modulus [Pa].
+        rho (float | Array): density ρ [kg/m³].
+
+    Returns:
+        (Array): T₁ [s] (broadcast over array arguments).
+
+    Example:
+        ```python
+        import jaxrock
+        jaxrock.first_period_eq21(50.0, 0.1, 30e9, 2500.0)  # ≈ 0.893 s
+        ```
+    """
     return 12.38 * jnp.sqrt(jnp.asarray(rho, dtype=float) / E) * (0.5 * jnp.asarray(height, dtype=float)) / tan_alpha
 
 
 def pushover_eq9(theta, alpha):
-    """Eq. 9: SM pushover F/(m g) = tanα/cosθ − tanθ (force at the column's mid-height)."""
+    """The rigid spring model's static pushover curve (eq. 9).
+
+    F/(m g) = tanα/cosθ − tanθ, the lateral force applied at the column's mid-height that holds it
+    at base rotation θ once the spring has yielded. The model's own curve, pre-yield branch and
+    flexible column included, is `AbstractSpringModel.pushover`.
+
+    Arguments:
+        theta (float | Array): base rotation θ [rad] (any shape).
+        alpha (float | Array): slenderness angle α [rad].
+
+    Returns:
+        (Array): F/(m g) [-], broadcast over the arguments.
+    """
     return jnp.tan(alpha) / jnp.cos(theta) - jnp.tan(theta)
 
 
 
 class Column(eqx.Module):
-    """Linear elastic column: Young's modulus E [Pa], density ρ [kg/m³], and optionally the
-    section area A [m²] and second moment I [m⁴] (per the model's out-of-plane thickness).
-    Without A, I the section is the block's solid rectangle 2b × 1 m: A = 2b, I = (2b)³/12."""
+    """A linear elastic column: its material and, optionally, its section.
+
+    Without A, I the section is the block's solid rectangle 2b × 1 m: A = 2b, I = (2b)³/12 (per the
+    model's out-of-plane thickness). A flexible spring model takes it (`SpringModel(block, column)`).
+
+    Arguments:
+        E (float | Array): Young's modulus [Pa], in [1e6, 1e15] (1e14 stands for a rigid column).
+        rho (float | Array): density ρ [kg/m³], in [10, 3e4]; default concrete's `CONCRETE_RHO` (2500).
+        A (float | Array | None): section area [m²], > 0; default None (the block's solid section).
+        I (float | Array | None): section second moment [m⁴], > 0; default None (the block's solid section).
+
+    Raises:
+        JaxrockInputError: when only one of `A`, `I` is given, or a value is outside its range.
+
+    Example:
+        ```python
+        import jaxrock
+        column = jaxrock.Column(30e9, 2500.0)  # concrete, the block's solid section
+        model = jaxrock.SpringModel(jaxrock.Block.from_slenderness(50.0, 0.1), column)
+        ```
+    """
 
     E: Float[Array, ""]
     rho: Float[Array, ""]
@@ -61,12 +125,27 @@ class Column(eqx.Module):
 
     @classmethod
     def concrete(cls, A=None, I=None) -> "Column":
-        """Concrete: `jaxrock.scene.CONCRETE_E` and `CONCRETE_RHO` (paper sections 4–6)."""
+        """A concrete column: `jaxrock.scene.CONCRETE_E` and `CONCRETE_RHO` (paper sections 4–6).
+
+        Arguments:
+            A (float | Array | None): section area [m²], > 0; default None (the block's solid section).
+            I (float | Array | None): section second moment [m⁴], > 0; default None (the block's solid section).
+
+        Returns:
+            The `Column`.
+        """
         return cls(CONCRETE_E, CONCRETE_RHO, A, I)
 
     @classmethod
     def quasi_rigid(cls, rho=CONCRETE_RHO) -> "Column":
-        """E = 10¹⁴ Pa (paper section 3: 'quasi-rigid' FE column)."""
+        """A quasi-rigid column: E = 10¹⁴ Pa (paper section 3: the 'quasi-rigid' FE column).
+
+        Arguments:
+            rho (float | Array): density ρ [kg/m³], in [10, 3e4]; default `CONCRETE_RHO` (2500).
+
+        Returns:
+            The `Column`.
+        """
         return cls(1e14, rho)
 
     def section(self, block: Block):

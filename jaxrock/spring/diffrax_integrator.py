@@ -46,12 +46,41 @@ _SOLVERS = {**_IMPLICIT, **_EXPLICIT}
 
 
 class SpringIntegrator(AbstractSpringIntegrator):
-    """diffrax settings of the spring model: an L-stable ESDIRK solver (`solver` ∈ kvaerno3/4/5,
-    stage equations by full Newton) or an explicit Runge–Kutta solver (tsit5, dopri5, dopri8: for
-    the one-DOF quasi-rigid SM only, whose one stiff part, the spring's pre-yield branch, is mild),
-    with an integral step-size controller; `atol` multiplies a per-component scale (α′, 2hα′, ×p′).
-    Defaults from the work–precision study in `benchmarks/bench_spring.py` and
-    `SpringModel.default_integrator`."""
+    """The diffrax integrator of the spring model.
+
+    An L-stable ESDIRK solver (kvaerno3/4/5, stage equations by full Newton) or an explicit
+    Runge–Kutta solver (tsit5, dopri5, dopri8: for the one-DOF quasi-rigid SM only, whose one stiff
+    part, the spring's pre-yield branch, is mild), with an integral step-size controller. Defaults
+    from the work–precision study in `benchmarks/bench_spring.py` and
+    `AbstractSpringModel.default_integrator` (the quasi-rigid model's default is
+    `SpringIntegrator(1e-10, 1e-10, solver="tsit5", max_steps=200_000)`). Constructed from its
+    fields, in this order; all are static.
+
+    Attributes:
+        rtol: relative tolerance, in (0, 1); default 1e-6.
+        atol: absolute tolerance, multiplying a per-component scale (α′, 2hα′, ×p′), in (0, 1);
+            default 1e-6.
+        solver: "kvaerno3", "kvaerno4", "kvaerno5", "tsit5", "dopri5" or "dopri8"; default "kvaerno5".
+        max_steps: bound on the steps of one solve, ≥ 16; default 20 000.
+        exact_rest: step the quasi-rigid model's pre-yield phase exactly until it first yields
+            (`jaxrock.spring.rest`) on a kinked spring; False: the solver's steps there too. Default True.
+        chunk_steps: a summary's steps per piece in a batch (`DiffraxSpringStepper`), ≥ 16; default 128.
+        root_finder: the ESDIRK stage solver, "newton" (full Newton) or "chord" (diffrax's VeryChord);
+            default "newton".
+        autodiff: "reverse" or "forward": the differentiation mode of its adjoint; default "reverse".
+
+    Raises:
+        JaxrockInputError: when `solver`, `root_finder` or `autodiff` is not one of its values, or a
+            number is outside its range.
+
+    Example:
+        ```python
+        import jaxrock
+        model = jaxrock.SpringModel(jaxrock.Block.from_slenderness(50.0, 0.1), jaxrock.Column.concrete())
+        integrator = jaxrock.SpringIntegrator(solver="kvaerno5")  # reverse-mode differentiable
+        sol = jaxrock.simulate(model, jaxrock.RickerPulse(2.0, 3.0), integrator=integrator)
+        ```
+    """
 
     rtol: float = eqx.field(static=True, default=1e-6)
     atol: float = eqx.field(static=True, default=1e-6)

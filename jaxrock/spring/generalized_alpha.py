@@ -89,18 +89,37 @@ LANDING_BAND = 0.05  # the landing tolerance at most this fraction of θs
 class GeneralizedAlpha(AbstractSpringIntegrator):
     """Adaptive generalized-α for `SpringModel` (quasi-rigid or flexible).
 
-    - `rtol`, `atol`: local error tolerances (atol scaled per component, see module docstring);
-    - `rho_inf`: spectral radius at infinite frequency, in [0, 1] (1: trapezoidal, no dissipation);
-    - `levels`: step-size ladder length (dt_top / 2^k, k < levels);
-    - `max_steps`: bound on attempted steps (then `Status.max_steps`);
-    - `max_newton`: Newton iterations per step before the step is retried at half the size;
-    - `newton_tol`: Newton stops when its increment, or the error its contraction leaves, is below
-      `newton_tol` × the error tolerance;
-    - `crossing`: the largest |Δθ| of a step through a smooth spring's pre-yield band, in θs
-      (module docstring; None: only the error estimate limits such steps). A kinked spring's steps
-      end on its kinks instead;
-    - `autodiff`: "forward" (`jax.jacfwd`, `jax.jvp`) or "reverse" (`jax.grad`, `jax.vjp`): the mode
-      its loops differentiate in (module docstring); the values are the same.
+    The flexible spring model's default integrator, inside `Checked` (module docstring,
+    `jaxrock.spring.generalized_alpha`). Constructed from its fields, in this order; all are static.
+
+    Attributes:
+        rtol: local relative error tolerance, in (0, 1); default 1e-5.
+        atol: local absolute error tolerance, scaled per component (module docstring), in (0, 1);
+            default 1e-5.
+        rho_inf: spectral radius at infinite frequency, in [0, 1] (1: trapezoidal, no dissipation);
+            default 0.9.
+        levels: step-size ladder length (dt_top / 2^k, k < levels), in [4, 40]; default 16.
+        max_steps: bound on attempted steps (then `Status.max_steps`), ≥ 16; default 100 000.
+        max_newton: Newton iterations per step before the step is retried at half the size, ≥ 2;
+            default 8.
+        newton_tol: Newton stops when its increment, or the error its contraction leaves, is below
+            `newton_tol` × the error tolerance; in (0, 1]; default 1e-2.
+        crossing: the largest |Δθ| of a step through a smooth spring's pre-yield band, in θs, in
+            (0, 100] or None (only the error estimate limits such steps); default 1. A kinked
+            spring's steps end on its kinks instead.
+        autodiff: "forward" (`jax.jacfwd`, `jax.jvp`) or "reverse" (`jax.grad`, `jax.vjp`): the mode
+            its loops differentiate in (module docstring); the values are the same. Default "forward".
+
+    Raises:
+        JaxrockInputError: when a field is outside its range or `autodiff` is neither mode.
+
+    Example:
+        ```python
+        import jaxrock
+        model = jaxrock.SpringModel(jaxrock.Block.from_slenderness(50.0, 0.1), jaxrock.Column.concrete())
+        integrator = jaxrock.GeneralizedAlpha(rtol=1e-6, atol=1e-6, rho_inf=0.8)
+        sol = jaxrock.simulate(model, jaxrock.RickerPulse(2.0, 3.0), integrator=integrator)
+        ```
     """
 
     rtol: float = eqx.field(static=True, default=1e-5)

@@ -35,29 +35,32 @@ from .system import ENERGY_FIELDS, HISTORY_FIELDS, QuasiRigidSystem, SpringSyste
 
 
 class AbstractSpringModel(AbstractModel):
-    """The paper's spring model (SM): a column on a rigid-plastic spring with its damper (eq. 18)
-    at the base. Two final kinds (issue 57): `QuasiRigidSpringModel`, the one-DOF body, and
-    `FlexibleSpringModel`, a corotational Euler–Bernoulli column; `SpringModel(block, column=None,
-    ...)` makes either. Their shared fields (arrays are vmappable/differentiable leaves):
+    """The paper's spring model (SM): a column on a rigid-plastic spring with its damper at the base.
 
-    - `block`: geometry (`Block`, with `b_base > b` for an extended rigid base, section 5);
-    - `added_masses` (static): add ΔI = I′o − (4/3) m h² (SPEC; paper section 3.3);
-    - `cbar`: damper coefficient c̄ (None: eq. 17 with α′, resolved at construction: always an array);
-    - `backbone` (static): the spring's moment–rotation curve, `jaxrock.Bilinear` or
-      `Tanh` (or their names; default `DEFAULT_BACKBONE`: the bilinear, the paper's rigid-plastic
-      spring, for both models);
-    - `smoothing`: θs/α′, the backbone's pre-yield rotation (the bilinear yield rotation θy, or
-      the tanh's θs; default `DEFAULT_SMOOTHING`: 1e-5 bilinear, 1e-4 tanh). What the defaults
-      leave, over `benchmarks/bench_backbone.py`'s scenes: the bilinear at 1e-5 within 8.3e-4 of α
-      of the rigid-plastic limit wherever that limit is settled (quasi-rigid and flexible); with the
-      flexible default integrator `Checked(GeneralizedAlpha(1e-5, 1e-5))` the total error (spring
-      and steps) is 4.9e-5 – 7.0e-5 median, 6.6e-3 – 2.5e-2 at most (tanh at 1e-4: 5.5e-4 – 7.9e-4,
-      2.4e-2 – 3.5e-2), the largest, in a probe, on runs it flags `inaccurate` (README, "Numerics");
-      `Checked(GeneralizedAlpha(1e-6, 1e-6))` came near 1e-3 there at about twice the cost.
-      Derivatives through the kinks are the motion's with either integrator (both end their steps
-      on the kinks);
-    - `fixed_base` (static: base rotation clamped, section 6);
-    - `threshold`: overturned when |θ| ≥ threshold·α′ (an array).
+    The damper is eq. 18's. Two final kinds (issue 57): `QuasiRigidSpringModel`, the one-DOF body,
+    and `FlexibleSpringModel`, a corotational Euler–Bernoulli column; `SpringModel(block,
+    column=None, ...)` makes either. Array fields are vmappable/differentiable leaves; the fields
+    marked static are structure.
+
+    What the default backbone and smoothing leave, over `benchmarks/bench_backbone.py`'s scenes: the
+    bilinear at 1e-5 within 8.3e-4 of α of the rigid-plastic limit wherever that limit is settled
+    (quasi-rigid and flexible); with the flexible default integrator
+    `Checked(GeneralizedAlpha(1e-5, 1e-5))` the total error (spring and steps) is 4.9e-5 – 7.0e-5
+    median, 6.6e-3 – 2.5e-2 at most (tanh at 1e-4: 5.5e-4 – 7.9e-4, 2.4e-2 – 3.5e-2), the largest,
+    in a probe, on runs it flags `inaccurate` (README, "Numerics"); `Checked(GeneralizedAlpha(1e-6,
+    1e-6))` came near 1e-3 there at about twice the cost. Derivatives through the kinks are the
+    motion's with either integrator (both end their steps on the kinks).
+
+    Attributes:
+        block: geometry (`Block`, with `b_base > b` for an extended rigid base, section 5).
+        added_masses: (static) whether ΔI = I′o − (4/3) m h² is added (SPEC; paper section 3.3).
+        cbar: damper coefficient c̄ [-], ≥ 0 (None at construction: eq. 17 with α′; always an array).
+        backbone: (static) the spring's moment–rotation curve, `Bilinear` or `Tanh` (default
+            `DEFAULT_BACKBONE`: the bilinear, the paper's rigid-plastic spring, for both models).
+        smoothing: θs/α′, the backbone's pre-yield rotation (the bilinear yield rotation θy, or the
+            tanh's θs), in (0, 1); default `DEFAULT_SMOOTHING` (1e-5 bilinear, 1e-4 tanh).
+        fixed_base: (static) base rotation clamped (section 6).
+        threshold: overturned when |θ| ≥ threshold·α′, in (0, 1] (an array).
     """
 
     block: eqx.AbstractVar[Block]
@@ -97,9 +100,10 @@ class AbstractSpringModel(AbstractModel):
 
     # -- AbstractModel --------------------------------------------------------------------------
     def default_integrator(self, autodiff: str | None = None) -> "SpringIntegrator | Checked":
-        """The work–precision choice (`jaxrock work-precision`, `benchmarks/bench_spring.py`; the
-        measured errors and costs, and the alternatives, are in the README, "Numerics and
-        performance"):
+        """The integrator a run takes by default: the work–precision choice.
+
+        Chosen by `jaxrock work-precision` and `benchmarks/bench_spring.py`; the measured errors and
+        costs, and the alternatives, are in the README, "Numerics and performance":
 
         - quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10 after the exact pre-yield phase
           (`jaxrock.spring.rest`: until the block first yields, its linear equation is stepped
@@ -117,9 +121,17 @@ class AbstractSpringModel(AbstractModel):
           or column, where the local tolerance does not bound the global error: `jaxrock.spring.
           checked`); the companion's looser steps on top of the run's (a batch runs the two apart).
 
-        `autodiff`: "reverse" or "forward" (`AbstractModel.default_integrator`); None: reverse for
-        the quasi-rigid spring, forward for the flexible column (`jax.jacfwd`; `simulate` under
-        `jax.grad` takes the reverse-mode form, the same values)."""
+        Arguments:
+            autodiff: "reverse" or "forward" (`AbstractModel.default_integrator`); default None:
+                reverse for the quasi-rigid spring, forward for the flexible column (`jax.jacfwd`;
+                `simulate` under `jax.grad` takes the reverse-mode form, the same values).
+
+        Returns:
+            A `SpringIntegrator` (quasi-rigid) or a `Checked` `GeneralizedAlpha` (flexible).
+
+        Raises:
+            JaxrockInputError: when `autodiff` is neither None, "reverse" nor "forward".
+        """
         if autodiff is not None:
             check_autodiff(autodiff)
         return self._default_integrator(autodiff)
@@ -139,39 +151,84 @@ class AbstractSpringModel(AbstractModel):
         return m * blk.inertia_ratio if self.added_masses else (4.0 / 3.0) * m * blk.h**2
 
     def pushover(self, theta):
-        """The model's own static pushover: the lateral load F/(m g) that holds the column at base
-        rotation `theta` [rad] (any shape), applied as a uniform lateral acceleration of its mass (for
-        a rigid column: F at mid-height, eq. 9's load). Solved by Newton on the static equilibrium
+        """The model's own static pushover: the lateral load F/(m g) that holds the column at `theta`.
+
+        The load is applied as a uniform lateral acceleration of the column's mass (for a rigid
+        column: F at mid-height, eq. 9's load). Solved by Newton on the static equilibrium
         ∇V(q) = (F/m) r with θ prescribed (r: the ground load vector; gravity P-Δ and, for a flexible
         column, its bending included). Quasi-rigid: (M(θ)/(m g h) − sinθ)/cosθ, which is eq. 9,
-        tanα/cosθ − tanθ, once the spring has yielded (|θ| beyond its pre-yield band)."""
+        tanα/cosθ − tanθ, once the spring has yielded (|θ| beyond its pre-yield band).
+
+        Arguments:
+            theta (float | Array): base rotation θ [rad] (any shape).
+
+        Returns:
+            (Array): F/(m g) [-], the shape of `theta`.
+
+        Raises:
+            JaxrockInputError: when the model has a fixed base (`fixed_base=True`).
+        """
         if self.fixed_base:
             raise JaxrockInputError("pushover: a fixed-base column (fixed_base=True) does not rock")
         return _pushover(self.system(), jnp.asarray(theta, dtype=float))
 
     def system(self, track_energy: bool = False) -> SpringSystem:
-        """The assembled system of this model (`QuasiRigidSystem`, `FlexibleSystem`): its arrays
-        computed once; with `track_energy`, the work integrals (`system.WORK_FIELDS`: damper,
-        Rayleigh, input) integrated alongside."""
+        """The assembled system of this model (`QuasiRigidSystem`, `FlexibleSystem`), its arrays computed once.
+
+        Arguments:
+            track_energy: integrate the work integrals (`system.WORK_FIELDS`: damper, Rayleigh, input)
+                alongside; default False.
+
+        Returns:
+            The `SpringSystem`.
+        """
         return assemble(self, track_energy)
 
     # -- public pieces for calibration / custom solves --------------------------------------------
     def vector_field(self, t, y, excitation: AbstractExcitation):
-        """dy/dt of the first-order form y = [q, v] (q[0] = θ). Assembles the system on each call;
-        inside loops prefer `self.system().vector_field` or `SpringIntegrator.solve`."""
+        """dy/dt of the first-order form y = [q, v] (q[0] = θ).
+
+        Assembles the system on each call; inside loops prefer `self.system().vector_field` or
+        `SpringIntegrator.solve`.
+
+        Arguments:
+            t (float): time [s].
+            y (Array): the state [q, v].
+            excitation: the ground motion (`AbstractExcitation`).
+
+        Returns:
+            (Array): dy/dt, the shape of `y`.
+        """
         return self.system().vector_field(t, y, excitation)
 
     def initial_state(self, theta0=0.0, theta_dot0=0.0):
-        """y at rest (gravity-preloaded column) rotated rigidly by θ0 with angular velocity ω0."""
+        """The state y at rest (gravity-preloaded column) rotated rigidly by θ0 with angular velocity ω0.
+
+        Arguments:
+            theta0 (float | Array): initial base rotation θ0 [rad]; default 0.
+            theta_dot0 (float | Array): initial angular velocity ω0 [rad/s]; default 0.
+
+        Returns:
+            (Array): y = [q, v].
+        """
         return self.system().initial_state(theta0, theta_dot0)
 
     def base_rotation(self, y):
         return y[0]
 
     def static_potential(self, theta):
-        """The one-DOF SM's own exact potential at zero velocity, My θs log cosh(θ/θs) − m g h (1 − cosθ)
-        [J] (→ SPEC's E(θ) = m g R (sinα|θ| − cosα(1 − cosθ)) as θs → 0). For the flexible model
-        this is the rigidly rotated column's value (its deformation adds only strain energy)."""
+        """The one-DOF model's own exact potential energy at zero velocity [J].
+
+        For the tanh backbone My θs log cosh(θ/θs) − m g h (1 − cosθ) (the backbone's potential in
+        general; → SPEC's E(θ) = m g R (sinα|θ| − cosα(1 − cosθ)) as θs → 0). For the flexible model
+        this is the rigidly rotated column's value (its deformation adds only strain energy).
+
+        Arguments:
+            theta (float | Array): base rotation θ [rad].
+
+        Returns:
+            (Array): The potential [J].
+        """
         return self.system().rigid_potential(theta)
 
     def mechanical_energy(self, y):
@@ -179,8 +236,22 @@ class AbstractSpringModel(AbstractModel):
 
     # -- run ------------------------------------------------------------------------------------
     def stepper(self, integrator, save=None, t1=None):
-        """The run as an `AbstractStepper` of `integrator` (an `AbstractSpringIntegrator`), on the
-        system assembled here once (energy integrals tracked when `save` asks for energies)."""
+        """The run as an `AbstractStepper` of `integrator`, on the system assembled here once.
+
+        Energy integrals are tracked when `save` asks for energies.
+
+        Arguments:
+            integrator (AbstractSpringIntegrator): the spring integrator (`SpringIntegrator`, `GeneralizedAlpha`,
+                `Checked`).
+            save (Save | None): what a history records (`Save`); default None: a summary run.
+            t1 (float | None): end of the run [s]; default None (`run_end`).
+
+        Returns:
+            (AbstractStepper): The `AbstractStepper`.
+
+        Raises:
+            JaxrockInputError: when `integrator` is not a spring integrator.
+        """
         if not isinstance(integrator, AbstractSpringIntegrator):
             raise JaxrockInputError(f"SpringModel needs a SpringIntegrator, GeneralizedAlpha or Checked, got {type(integrator).__name__}")
         fields = () if save is None else save.fields
@@ -209,8 +280,33 @@ class AbstractSpringModel(AbstractModel):
 
 
 class QuasiRigidSpringModel(AbstractSpringModel):
-    """The one-DOF quasi-rigid SM (paper sections 3–4): a rigid column of concrete's density on the
-    spring (`AbstractSpringModel`'s fields; no column, no column damping)."""
+    """The one-DOF quasi-rigid spring model (paper sections 3–4).
+
+    A rigid column of concrete's density on the spring (`AbstractSpringModel`'s fields; no column,
+    no column damping). `SpringModel(block)` makes it.
+
+    Arguments:
+        block: the column's geometry (`Block`).
+        added_masses: whether the added rotational inertia ΔI = I′o − (4/3) m h² is included (SPEC;
+            paper section 3.3); default True.
+        cbar (float | Array | None): damper coefficient c̄ [-], ≥ 0; default None: eq. 17, 0.02 (α′/0.1)² (`cbar_eq17`).
+        backbone: the spring's moment–rotation curve, `Bilinear`, `Tanh` or their names "bilinear",
+            "tanh"; default None: `DEFAULT_BACKBONE` (the bilinear).
+        smoothing (float | Array | None): θs/α′, the backbone's pre-yield rotation, in (0, 1); default None: `DEFAULT_SMOOTHING`
+            for the backbone (1e-5 bilinear, 1e-4 tanh).
+        fixed_base: clamp the base rotation (section 6); default False.
+        threshold (float | Array): overturned when |θ| ≥ threshold·α′ [-], in (0, 1]; default 1.
+
+    Raises:
+        JaxrockInputError: when `block` is not a `Block`, the backbone is unknown, or `cbar`,
+            `smoothing` or `threshold` is outside its range.
+
+    Example:
+        ```python
+        import jaxrock
+        model = jaxrock.QuasiRigidSpringModel(jaxrock.Block.from_slenderness(50.0, 0.1), cbar=0.02)
+        ```
+    """
 
     block: Block
     cbar: Float[Array, ""]
@@ -246,14 +342,41 @@ class QuasiRigidSpringModel(AbstractSpringModel):
 
 
 class FlexibleSpringModel(AbstractSpringModel):
-    """The SM with a corotational Euler–Bernoulli column (paper sections 5–6). Beyond
-    `AbstractSpringModel`'s fields:
+    """The spring model with a corotational Euler–Bernoulli column (paper sections 5–6).
 
-    - `column`: `Column` (E, ρ, optional A, I);
-    - `zeta`: column damping ratio ζ, stiffness-proportional Rayleigh damping (`rayleigh`) set for ζ
-      at the first fixed-base period of the discretised column *with its added rotational masses*
-      (`first_period`; they lengthen it a little, `tests/test_spring.py`);
-    - `n_elements` (static)."""
+    Beyond `AbstractSpringModel`'s fields it holds the `column`, its damping ratio `zeta` and its
+    mesh `n_elements` (static). The column's damping is stiffness-proportional Rayleigh damping
+    (`rayleigh`) set for ζ at the first fixed-base period of the discretised column *with its added
+    rotational masses* (`first_period`; they lengthen it a little, `tests/test_spring.py`).
+    `SpringModel(block, column)` makes it.
+
+    Arguments:
+        block: the column's geometry (`Block`).
+        column: the column's material and section (`Column`: E, ρ, optional A, I).
+        added_masses: whether the added rotational inertia ΔI = I′o − (4/3) m h² is included (SPEC;
+            paper section 3.3); default True.
+        cbar (float | Array | None): damper coefficient c̄ [-], ≥ 0; default None: eq. 17, 0.02 (α′/0.1)² (`cbar_eq17`).
+        backbone: the spring's moment–rotation curve, `Bilinear`, `Tanh` or their names "bilinear",
+            "tanh"; default None: `DEFAULT_BACKBONE` (the bilinear).
+        smoothing (float | Array | None): θs/α′, the backbone's pre-yield rotation, in (0, 1); default None: `DEFAULT_SMOOTHING`
+            for the backbone (1e-5 bilinear, 1e-4 tanh).
+        zeta (float | Array): column damping ratio ζ [-], ≥ 0; default `CONCRETE_ZETA` (0.01).
+        n_elements: number of column elements, an integer ≥ 1; default 10.
+        fixed_base: clamp the base rotation (section 6); default False.
+        threshold (float | Array): overturned when |θ| ≥ threshold·α′ [-], in (0, 1]; default 1.
+
+    Raises:
+        JaxrockInputError: when `block` is not a `Block`, `column` is not a `Column`, `n_elements` is
+            not an integer ≥ 1, the backbone is unknown, or a value is outside its range.
+
+    Example:
+        ```python
+        import jaxrock
+        block = jaxrock.Block.from_slenderness(50.0, 0.1)
+        model = jaxrock.FlexibleSpringModel(block, jaxrock.Column.concrete(), n_elements=8)
+        model.first_period()  # T₁ [s] of the discretised column
+        ```
+    """
 
     block: Block
     column: Column
@@ -305,8 +428,10 @@ class FlexibleSpringModel(AbstractSpringModel):
         return self.column.rho * I * le * jnp.concatenate([jnp.full(1, 0.5), jnp.ones(n - 1), jnp.full(1, 0.5)])
 
     def first_period(self):
-        """First fixed-base period T₁ [s] of the discretised column with the model's rotational masses
-        (base rotation clamped, no gravity): the period ζ refers to (eq. 21 is the bare solid column's)."""
+        """First fixed-base period T₁ [s] of the discretised column with the model's rotational masses.
+
+        Base rotation clamped, no gravity: the period ζ refers to (eq. 21 is the bare solid column's).
+        """
         A, I = self.column.section(self.block)
         E = self.column.E
         return beam.first_period(self.block.h, self.n_elements, self.mass(), E * A, E * I, self.rotational_masses())
@@ -320,12 +445,44 @@ class FlexibleSpringModel(AbstractSpringModel):
 def SpringModel(block: Block, column: Column | None = None, *, added_masses: bool = True, cbar=None,
                 backbone: AbstractBackbone | str | None = None, smoothing=None, zeta=None, n_elements: int | None = None,
                 fixed_base: bool = False, threshold=1.0) -> AbstractSpringModel:
-    """The paper's spring model of `block`: quasi-rigid (`QuasiRigidSpringModel`) without a
-    `column`, flexible (`FlexibleSpringModel`, `zeta` default `CONCRETE_ZETA`, `n_elements` 10)
-    with one; the other arguments as `AbstractSpringModel` describes. `zeta` and `n_elements`
-    belong to a column: without one they act on nothing and are not kept (as before the split,
-    so that code written for either kind, e.g. `SpringModel(block, column, n_elements=4)` with
-    `column` None, runs unchanged)."""
+    """The paper's spring model of `block`, quasi-rigid or with a flexible column.
+
+    Quasi-rigid (`QuasiRigidSpringModel`) without a `column`, flexible (`FlexibleSpringModel`)
+    with one. `zeta` and `n_elements` belong to a column: without one they act on nothing and are
+    not kept (as before the split, so that code written for either kind, e.g.
+    `SpringModel(block, column, n_elements=4)` with `column` None, runs unchanged).
+
+    Arguments:
+        block: the column's geometry (`Block`).
+        column: the flexible column (`Column`); default None: the quasi-rigid model.
+        added_masses: whether the added rotational inertia ΔI = I′o − (4/3) m h² is included (SPEC;
+            paper section 3.3); default True.
+        cbar (float | Array | None): damper coefficient c̄ [-], ≥ 0; default None: eq. 17, 0.02 (α′/0.1)² (`cbar_eq17`).
+        backbone: the spring's moment–rotation curve, `Bilinear`, `Tanh` or their names "bilinear",
+            "tanh"; default None: `DEFAULT_BACKBONE` (the bilinear).
+        smoothing (float | Array | None): θs/α′, the backbone's pre-yield rotation, in (0, 1); default None: `DEFAULT_SMOOTHING`
+            for the backbone (1e-5 bilinear, 1e-4 tanh).
+        zeta (float | Array | None): column damping ratio ζ [-], ≥ 0; default None: `CONCRETE_ZETA` (0.01). Flexible only.
+        n_elements: number of column elements, an integer ≥ 1; default None: 10. Flexible only.
+        fixed_base: clamp the base rotation (section 6); default False.
+        threshold (float | Array): overturned when |θ| ≥ threshold·α′ [-], in (0, 1]; default 1.
+
+    Returns:
+        The model, a `QuasiRigidSpringModel` or a `FlexibleSpringModel`.
+
+    Raises:
+        JaxrockInputError: when `block` is not a `Block`, `column` is neither None nor a `Column`,
+            `n_elements` is not an integer ≥ 1, the backbone is unknown, or a value is outside its range.
+
+    Example:
+        ```python
+        import jaxrock
+        block = jaxrock.Block.from_slenderness(50.0, 0.1)
+        rigid = jaxrock.SpringModel(block)  # quasi-rigid, one DOF
+        flexible = jaxrock.SpringModel(block, jaxrock.Column.concrete(), zeta=0.02)
+        sol = jaxrock.simulate(rigid, jaxrock.RickerPulse(2.0, 3.0))
+        ```
+    """
     if column is None:
         return QuasiRigidSpringModel(block, added_masses=added_masses, cbar=cbar, backbone=backbone, smoothing=smoothing,
                                      fixed_base=fixed_base, threshold=threshold)

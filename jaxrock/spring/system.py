@@ -40,11 +40,13 @@ WORK_FIELDS = ("damper", "rayleigh", "input")  # the work integrals tracked besi
 
 
 class AbstractSpringSystem(eqx.Module):
-    """The spring model assembled for a run (`SpringModel.system()`, built by `assemble`): every
-    array a right-hand side needs, computed once per scene — a value, vmappable like the model.
-    Two final kinds (issue 57): `QuasiRigidSystem`, the one-DOF body, and `FlexibleSystem`, the
-    corotational beam column; what they share is written here on what each supplies (its column's
-    potential, forces, mass, rest state and tolerance scales).
+    """The spring model assembled for a run: every array a right-hand side needs, computed once per scene.
+
+    Made by `AbstractSpringModel.system()` (built by `assemble`), never constructed directly; a
+    value, vmappable like the model. Two final kinds (issue 57): `QuasiRigidSystem`, the one-DOF
+    body, and `FlexibleSystem`, the corotational beam column; what they share is written here on
+    what each supplies (its column's potential, forces, mass, rest state and tolerance scales).
+    `SpringSystem` is its name before the split: either kind. Its members:
 
     - sizes: `ndof`;
     - mass: `m`, `Itot` (one-DOF inertia about the base centre), `mass_matrix`, `mass_times`;
@@ -54,7 +56,24 @@ class AbstractSpringSystem(eqx.Module):
     - tangents for implicit steps: `tangents` (K₀, C₀ at rest), `rotate`;
     - scales: `alpha_r`, `p_r`, `R_r`, `atol_scale` (tolerances per component), `deform_scale`;
     - state: `initial_state`, `split`, `history`;
-    - the levels a run is watched against: `theta_up` (uplift), `settled` (a summary's stop)."""
+    - the levels a run is watched against: `theta_up` (uplift), `settled` (a summary's stop).
+
+    Attributes:
+        fixed_base: (static) base rotation clamped.
+        track_energy: (static) the work integrals (damper, Rayleigh, input) integrated alongside the state.
+        backbone: (static) the spring's backbone (`AbstractBackbone`).
+        h: half-height h [m].
+        m: column mass m [kg].
+        My: the spring's yield moment My = m g b′ [N·m].
+        theta_s: the backbone's pre-yield rotation θs = smoothing · α′ [rad].
+        c: the damper coefficient c (eq. 18) [N·m·s].
+        alpha_r: the rocking slenderness angle α′ [rad].
+        p_r: the rocking frequency parameter p′ [rad/s].
+        R_r: the rocking half-diagonal R′ [m].
+        Itot: one-DOF inertia about the base centre [kg·m²] (also used for the flexible model's rigid potential).
+        deform_scale: with a fixed base, the tolerance scales × (static drift / 2h α′).
+        branch: a kinked backbone's branch the run is on (`AbstractBackbone.kinked`; None: the whole backbone).
+    """
 
     fixed_base: eqx.AbstractVar[bool]
     track_energy: eqx.AbstractVar[bool]
