@@ -6,7 +6,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 TEXT = {".py", ".md", ".ipynb", ".toml", ".cfg", ".txt", ".yml", ".yaml", ".json", ".cff", ""}
-SKIP = {".git", ".venv", "out", "build", "dist", "__pycache__", ".pytest_cache"}
+SKIP = {".git", ".venv", "out", "build", "dist", "__pycache__", ".pytest_cache", ".cache", "site"}  # .cache: mkdocs-jupyter's
 # a folder beside the clone (the reference material, data or tools a developer had there) or an
 # absolute path of a machine
 OUTSIDE = re.compile(r"\.\./(?:shared|data|\.library)\b|/work/|/home/\w|/root/|/Users/\w|[A-Z]:\\\\Users")
