@@ -19,7 +19,20 @@ import numpy as np
 
 
 class JaxrockInputError(ValueError):
-    """Bad input: names the parameter, the value and the valid range."""
+    """Bad input, refused in one line that names the parameter, the value and the valid range.
+
+    A `ValueError`. Raised by the public constructors and functions on concrete values, before
+    anything is traced or compiled; under `jax.vmap`/`jax.jit` the values are tracers and a run
+    reports `Status.invalid_input` instead.
+
+    Example:
+        ```python
+        try:
+            jaxrock.Block.from_slenderness(10.0, 1.5)
+        except jaxrock.JaxrockInputError as e:
+            print(e)  # tan_alpha = 1.5 is outside the valid range [0.001, 1)
+        ```
+    """
 
 
 def is_concrete(x) -> bool:

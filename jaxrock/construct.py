@@ -24,10 +24,31 @@ from .scene import MODEL_KINDS, PULSE_PARAMS, PULSES, model_kinds, pulse_class
 
 
 def scene_model(kind: str, block: Block, **parameters):
-    """The model of one scene of model kind `kind` (`jaxrock.scene.model_kinds()`), built by its
-    registered builder (`jaxrock.scene.ModelKind`) from `block` and the given `parameters` (None:
-    the default). Refuses a parameter the kind does not take, and a concrete value outside the
-    kind's own declaration (`jaxrock.scene.Param`)."""
+    """The model of one scene of model kind `kind`, built by its registered builder.
+
+    The builder is the kind's `jaxrock.scene.ModelKind.build`; traceable (`jax.vmap` over the
+    parameters builds a batch of models).
+
+    Arguments:
+        kind: a registered model kind (`jaxrock.scene.model_kinds()`: "rigid", "spring",
+            "spring-flexible", and any registered since).
+        block: the scene's geometry.
+        **parameters (float | Array | str | None): the kind's parameters (e.g. `eta`, `cbar`, `E`,
+            `backbone`); None or left out: the builder's default.
+
+    Returns:
+        (AbstractModel): the model.
+
+    Raises:
+        JaxrockInputError: when `kind` is not registered, a parameter is not one the kind takes, or a
+            concrete value is outside the kind's own declaration (`jaxrock.scene.Param`).
+
+    Example:
+        ```python
+        block = jaxrock.Block.from_slenderness(10.0, 0.2)
+        model = jaxrock.scene_model("rigid", block, eta=0.9)
+        ```
+    """
     if kind not in MODEL_KINDS:
         raise JaxrockInputError(f"model = {kind!r}; valid: {', '.join(model_kinds())}")
     entry = MODEL_KINDS[kind]
@@ -60,9 +81,32 @@ def pulse_values(pulse, values: Mapping) -> dict:
 
 
 def scene_pulse(pulse, block: Block | None, values: Mapping):
-    """A pulse of kind `pulse` (a name of `jaxrock.scene.PULSES`, or a class or callable
-    `(a_p, omega_p, **parameters)`) from `values`: `a_p` [m/s²] or `accel_ratio` (a_p/(g tanα′)
-    of `block`), `omega_p` [rad/s] or `omega_ratio` (ω_p/p′), and the kind's own parameters."""
+    """A pulse of kind `pulse` from named values: amplitude, frequency and the kind's own parameters.
+
+    Traceable: `jax.vmap` over the values builds a batch of pulses.
+
+    Arguments:
+        pulse (str | Callable): a pulse kind (a name of `jaxrock.scene.PULSES`: "symmetric",
+            "antisymmetric", "sine", or any registered since), or a class or callable
+            `(a_p, omega_p, **parameters)`.
+        block: the block whose α′ and p′ the ratios refer to; may be None where both `a_p` and
+            `omega_p` are given.
+        values: `a_p` [m/s²] or `accel_ratio` (a_p/(g tanα′)), `omega_p` [rad/s] or `omega_ratio`
+            (ω_p/p′) (a ratio left out: 1), and the kind's own parameters (e.g. `n_cycles`; left
+            out: the class's default). Other keys are ignored.
+
+    Returns:
+        (AbstractExcitation): the pulse.
+
+    Raises:
+        JaxrockInputError: when `pulse` names no registered kind, or the pulse refuses a value
+            (e.g. a_p = 0, ω_p ≤ 0).
+
+    Example:
+        ```python
+        pulse = jaxrock.scene_pulse("sine", block, {"accel_ratio": 2.0, "omega_ratio": 3.0, "n_cycles": 1.5})
+        ```
+    """
     if "a_p" in values and "omega_p" in values:
         a_p, omega_p = values["a_p"], values["omega_p"]
     else:
@@ -79,8 +123,34 @@ def scene_block(values: Mapping) -> Block:
 
 
 def scene_of(kind: str, pulse, values: Mapping, **options):
-    """(model, pulse) of one scene from flat `values` (`scene_block`, `kind_values`,
-    `scene_pulse`); `options`: the kind's non-numeric options (e.g. `backbone`)."""
+    """The model and pulse of one scene from flat values (a scenes file's row, a sweep's point).
+
+    The block is `Block.from_slenderness(height, tan_alpha, tan_alpha_base)` (`scene_block`), the
+    model `scene_model` with the values that are the kind's parameters (`kind_values`), the pulse
+    `scene_pulse`. Traceable: `jax.vmap` over the values builds a batch of scenes.
+
+    Arguments:
+        kind: a registered model kind ("rigid", "spring", "spring-flexible", ...).
+        pulse (str | Callable): a pulse kind or a pulse class or callable (see `scene_pulse`).
+        values: `height` (2h [m]) and `tan_alpha` (required), `tan_alpha_base` (absent or None: no
+            base), the kind's numeric parameters and the pulse's values (see `scene_pulse`).
+        **options (str | float): the kind's non-numeric options (e.g. `backbone`, `smoothing`).
+
+    Returns:
+        model (AbstractModel): the scene's model.
+        pulse (AbstractExcitation): the scene's pulse.
+
+    Raises:
+        JaxrockInputError: when a value is outside its range, or the kind or pulse is not registered.
+        KeyError: when `height` or `tan_alpha` is missing.
+
+    Example:
+        ```python
+        values = {"height": 10.0, "tan_alpha": 0.2, "accel_ratio": 2.0, "omega_ratio": 3.0}
+        model, pulse = jaxrock.scene_of("rigid", "symmetric", values)
+        sol = jaxrock.simulate(model, pulse)
+        ```
+    """
     block = scene_block(values)
     return scene_model(kind, block, **kind_values(kind, values), **options), scene_pulse(pulse, block, values)
 

@@ -27,20 +27,52 @@ _BISECTIONS = 64
 
 
 class AbstractExcitation(eqx.Module):
-    """Horizontal ground acceleration üg(t) [m/s²]."""
+    """Horizontal ground acceleration üg(t) [m/s²]: the base class of every excitation.
+
+    An excitation is a value (an `eqx.Module`, a pytree): it is passed to the solvers as an
+    argument, never closed over, so a batch of them can be `vmap`ped and differentiated. A new
+    excitation implements `__call__` (üg(t) [m/s²]), the window `t_start`, `t_end` [s],
+    `max_step` [s], `step_ts` (kinks, or None) and `next_exceedance`; `scaled`, `peak`,
+    `limits` and `step_ts_from` have defaults.
+
+    Example:
+        ```python
+        pulse = jaxrock.RickerPulse(a_p=3.0, omega_p=4.0)
+        float(pulse(0.0))  # üg(0) = a_p = 3.0 m/s²
+        ```
+    """
 
     def limits(self) -> tuple[Limit, ...]:
-        """Valid ranges of the parameters (`jaxrock._validate.Limit`); none by default."""
+        """Valid ranges of the parameters; none by default.
+
+        Returns:
+            (tuple[Limit, ...]): one `jaxrock._validate.Limit` per checked parameter.
+        """
         return ()
 
     def scaled(self, factor) -> "AbstractExcitation":
-        """The same excitation with its accelerations multiplied by `factor` (traceable: a run's
-        sensitivity differentiates with respect to it, `jaxrock.sensitivity`)."""
+        """The same excitation with its accelerations multiplied by `factor`.
+
+        Traceable: a run's sensitivity differentiates with respect to it (`jaxrock.sensitivity`).
+
+        Arguments:
+            factor (float | Array): the factor on üg [–].
+
+        Returns:
+            (AbstractExcitation): the scaled excitation.
+
+        Raises:
+            NotImplementedError: where a subclass does not say how to scale it (the default).
+        """
         raise NotImplementedError(f"{type(self).__name__} does not say how to scale it (AbstractExcitation.scaled)")
 
     @abc.abstractmethod
     def __call__(self, t) -> Float[Array, ""]:
-        """üg(t) in m/s²."""
+        """The ground acceleration üg(t) [m/s²].
+
+        Arguments:
+            t (float | Array): time [s].
+        """
 
     @property
     @abc.abstractmethod
@@ -70,16 +102,35 @@ class AbstractExcitation(eqx.Module):
         return None
 
     def step_ts_from(self, t, m: int):
-        """The `step_ts` that a solve from `t` of at most `m` steps can reach (each step ends at the
-        next one at the latest): a solve carries its `step_ts` through every step, so a record's
-        whole sample grid would cost each step of a vmapped batch its length. Default: all of them."""
+        """The `step_ts` that a solve from `t` of at most `m` steps can reach.
+
+        Each step ends at the next of the `step_ts` at the latest. A solve carries its `step_ts`
+        through every step, so a record's whole sample grid would cost each step of a vmapped batch
+        its length. Default: all of them.
+
+        Arguments:
+            t (float | Array): the solve's start time [s].
+            m: the most steps the solve takes.
+
+        Returns:
+            (Array | None): the times [s] a solve may step on, or None (no kinks).
+        """
         return self.step_ts
 
     @abc.abstractmethod
     def next_exceedance(self, t, level) -> Float[Array, ""]:
         """First time τ ≥ t with |üg(τ)| > level (τ = t if it already exceeds); +inf if none.
 
-        Strict: a pulse or record whose peak is exactly the level never exceeds it."""
+        Strict: a pulse or record whose peak is exactly the level never exceeds it. With the level
+        g tanα′ it is the uplift time of a body at rest.
+
+        Arguments:
+            t (float | Array): time to search from [s].
+            level (float | Array): the level on |üg| [m/s²], ≥ 0.
+
+        Returns:
+            (Array): the time τ [s], or +inf.
+        """
 
 
 def _implicit_time(f, tau, level):
@@ -212,7 +263,25 @@ def _as_float(x):
 
 
 class RickerPulse(AbstractRicker):
-    """Symmetric Ricker pulse üg(t) = a_p (1 − ω_p² t²/2) exp(−ω_p² t²/4) (SPEC)."""
+    """Symmetric Ricker pulse üg(t) = a_p (1 − ω_p² t²/2) exp(−ω_p² t²/4) (SPEC, eq. 28).
+
+    Centred at t = 0, with max |üg| = |a_p|; its window is |ω_p t| ≤ 12, outside which |üg| < 1.7e-14 |a_p|.
+    The pulse kind "symmetric" (`jaxrock.scene.PULSES`). Both fields are array leaves (vmap over them).
+
+    Attributes:
+        a_p: amplitude [m/s²], finite and ≠ 0 (either sign).
+        omega_p: frequency ω_p [rad/s], > 0.
+
+    Raises:
+        JaxrockInputError: when a concrete a_p is 0 or not finite, or omega_p ≤ 0.
+
+    Example:
+        ```python
+        block = jaxrock.Block.from_slenderness(10.0, 0.2)
+        pulse = jaxrock.RickerPulse(*jaxrock.pulse_of_ratios(block, 2.0, 3.0))
+        sol = jaxrock.simulate(jaxrock.RigidModel(block), pulse)
+        ```
+    """
 
     a_p: Float[Array, ""] = eqx.field(converter=_as_float)
     omega_p: Float[Array, ""] = eqx.field(converter=_as_float)
@@ -221,11 +290,33 @@ class RickerPulse(AbstractRicker):
 
     @staticmethod
     def shape(x):
+        """The normalised wavelet f(x) = (1 − x²/2) exp(−x²/4), x = ω_p t, max |f| = 1.
+
+        Arguments:
+            x (float | Array): the dimensionless time ω_p t [–].
+        """
         return _ricker_sym(x)
 
 
 class AntisymmetricRickerPulse(AbstractRicker):
-    """Antisymmetric Ricker pulse, eq. 29: üg = (a_p/β)(ω_p²t²/3 − 3)(ω_p t/√3) exp(−ω_p²t²/6), β = 1.38011905… (max |üg| = a_p)."""
+    """Antisymmetric Ricker pulse, eq. 29: üg = (a_p/β)(ω_p²t²/3 − 3)(ω_p t/√3) exp(−ω_p²t²/6).
+
+    β = 1.38011905… (rounded to 1.3801 in the paper) is the unscaled peak, so that max |üg| = |a_p|
+    exactly. Centred at t = 0; its window is |ω_p t| ≤ 15, outside which |üg| < 2.4e-14 |a_p|. The
+    pulse kind "antisymmetric" (`jaxrock.scene.PULSES`). Both fields are array leaves.
+
+    Attributes:
+        a_p: amplitude [m/s²], finite and ≠ 0 (either sign).
+        omega_p: frequency ω_p [rad/s], > 0.
+
+    Raises:
+        JaxrockInputError: when a concrete a_p is 0 or not finite, or omega_p ≤ 0.
+
+    Example:
+        ```python
+        pulse = jaxrock.AntisymmetricRickerPulse(a_p=4.0, omega_p=5.0)
+        ```
+    """
 
     a_p: Float[Array, ""] = eqx.field(converter=_as_float)
     omega_p: Float[Array, ""] = eqx.field(converter=_as_float)
@@ -234,6 +325,11 @@ class AntisymmetricRickerPulse(AbstractRicker):
 
     @staticmethod
     def shape(x):
+        """The normalised wavelet f(x) = (x²/3 − 3)(x/√3) exp(−x²/6)/β, x = ω_p t, max |f| = 1.
+
+        Arguments:
+            x (float | Array): the dimensionless time ω_p t [–].
+        """
         return _ricker_anti(x)
 
 
@@ -249,10 +345,26 @@ def _check_cycles(n_cycles) -> None:
 
 class SinePulse(AbstractExcitation):
     """One-sided sine pulse of N cycles: üg(t) = a_p sin(ω_p t) for 0 ≤ t ≤ 2πN/ω_p, zero outside.
+
     N = 1 is the one-sine acceleration pulse (Makris & Roussos 2000's type-A cycloidal pulse, a
-    velocity pulse of one sign), N = 1/2 a half-sine; N is whole half cycles (üg ends at zero), an
-    array leaf (vmap over it). Its exceedances are in closed form: |sin x| > ℓ on (kπ + asin ℓ,
-    (k + 1)π − asin ℓ)."""
+    velocity pulse of one sign), N = 1/2 a half-sine; N is whole half cycles (üg ends at zero). Its
+    exceedances are in closed form: |sin x| > ℓ on (kπ + asin ℓ, (k + 1)π − asin ℓ). The pulse kind
+    "sine" (`jaxrock.scene.PULSES`). Every field is an array leaf (vmap over it).
+
+    Attributes:
+        a_p: amplitude [m/s²], finite and ≠ 0 (either sign).
+        omega_p: frequency ω_p [rad/s], > 0.
+        n_cycles: number of cycles N [–], a multiple of 0.5 in [0.5, `MAX_CYCLES`] = [0.5, 100]; default 1.
+
+    Raises:
+        JaxrockInputError: when a concrete a_p is 0 or not finite, omega_p ≤ 0, or n_cycles is
+            outside [0.5, 100] or not a whole number of half cycles.
+
+    Example:
+        ```python
+        pulse = jaxrock.SinePulse(a_p=3.0, omega_p=4.0, n_cycles=1.5)  # ends at t = 3π/4 s
+        ```
+    """
 
     a_p: Float[Array, ""] = eqx.field(converter=_as_float)
     omega_p: Float[Array, ""] = eqx.field(converter=_as_float)
@@ -277,7 +389,11 @@ class SinePulse(AbstractExcitation):
         return jnp.where(inside, self.a_p * jnp.sin(self.omega_p * t), 0.0)
 
     def scaled(self, factor) -> "SinePulse":
-        """The same pulse at `factor` × a_p."""
+        """The same pulse at `factor` × a_p.
+
+        Arguments:
+            factor (float | Array): the factor on a_p [–].
+        """
         return eqx.tree_at(lambda e: e.a_p, self, self.a_p * jnp.asarray(factor, dtype=float))
 
     @property
@@ -315,7 +431,15 @@ class SinePulse(AbstractExcitation):
 
 
 class StillGround(AbstractExcitation):
-    """üg ≡ 0: free vibration and free rocking (e.g. the calibration of c̄ from θ₀ at rest)."""
+    """No ground motion, üg ≡ 0: free vibration and free rocking (e.g. the calibration of c̄ from θ₀ at rest).
+
+    It has no parameters; its window is [0, 0] and it never exceeds any level.
+
+    Example:
+        ```python
+        ground = jaxrock.StillGround()
+        ```
+    """
 
     def __call__(self, t):
         return jnp.zeros_like(jnp.asarray(t, dtype=float))
@@ -358,13 +482,34 @@ def crossing(t0, t1, a0, a1, level):
 
 
 class Record(AbstractExcitation):
-    """A sampled ground-motion record: uniform step `dt` [s], accelerations `acc` [m/s²] from t = 0,
-    linear between samples and zero outside, multiplied by `scale` (an array leaf: vmap over it).
-    `length`: the number of samples that are the record (an array leaf, default all of `acc`): a
-    record `padded` with zeros to a suite's longest keeps its own end, so that records of distinct
-    lengths share one array shape, hence one compiled program.
+    """A sampled ground-motion record: accelerations at a uniform step from t = 0.
+
+    üg is linear between samples and zero outside the record, multiplied by `scale`. A record
+    `padded` with zeros to a suite's longest keeps its own end (`length`), so that records of
+    distinct lengths share one array shape, hence one compiled program.
 
     Read files with `jaxrock.read_record` (PEER `.AT2` or two-column text) or `jaxrock.el_centro()`.
+
+    Arguments:
+        acc (ArrayLike): the accelerations [m/s²], a 1-D array of at least 2 samples, all finite.
+        dt (float | Array): the sample step [s], > 0.
+        scale (float | Array): factor on the accelerations [–], finite and ≥ 0; default 1 (an array
+            leaf: vmap over it).
+        name: the record's name (static: part of what a compiled program is keyed by); default "record".
+        length (int | Array | None): the number of samples that are the record, in [2, len(acc)] (an
+            array leaf); default None: all of `acc`.
+
+    Raises:
+        JaxrockInputError: when a concrete `acc` is not 1-D, has fewer than 2 samples or a non-finite
+            one, or `dt`, `scale` or `length` is outside its range.
+
+    Example:
+        ```python
+        import numpy as np
+
+        acc = np.sin(np.linspace(0.0, 20.0, 2001))  # 20 s at dt = 0.01 s
+        record = jaxrock.Record(acc, dt=0.01, scale=0.5, name="sine")
+        ```
     """
 
     acc: Float[Array, " n"]
@@ -397,22 +542,40 @@ class Record(AbstractExcitation):
 
     @property
     def n(self) -> int:
+        """Number of samples held (padding included)."""
         return self.acc.shape[-1]
 
     @property
     def times(self):
+        """Sample times k·dt [s], k = 0 … n − 1."""
         return self.dt * jnp.arange(self.n)
 
     def padded(self, n: int, name: str | None = None) -> "Record":
         """The same record with zeros appended up to `n` samples: the same motion, the same end.
-        `name` (static, so part of what a compiled program is keyed by): the padded record's, the
-        same by default; records of a suite padded to one length and one name share a program."""
+
+        Records of a suite padded to one length and one name share a compiled program.
+
+        Arguments:
+            n: the number of samples, ≥ `self.n`.
+            name: the padded record's name (static, so part of what a compiled program is keyed by);
+                default None: the same name.
+
+        Returns:
+            (Record): the padded record (its `length` unchanged).
+
+        Raises:
+            JaxrockInputError: when `n` is less than the samples the record holds.
+        """
         if n < self.n:
             raise JaxrockInputError(f"record {self.name!r} has {self.n} samples; cannot pad it to {n}")
         return Record(np.pad(np.asarray(self.acc), (0, n - self.n)), self.dt, self.scale, self.name if name is None else name, self.length)
 
     def scaled(self, factor) -> "Record":
-        """The same record multiplied by `factor` (composes with the current scale)."""
+        """The same record multiplied by `factor` (composes with the current scale).
+
+        Arguments:
+            factor (float | Array): the factor on `scale` [–].
+        """
         return eqx.tree_at(lambda r: r.scale, self, self.scale * jnp.asarray(factor, dtype=float))
 
     def __call__(self, t):

@@ -35,21 +35,34 @@ AUTODIFF_MODES = ("reverse", "forward")
 
 
 class AbstractIntegrator(eqx.Module):
-    """Numerical settings of a model's time integration (tolerances, bounds), and the one thing an
-    integrator does: turn a run of a model into an `AbstractStepper` (`stepper`), whose `Schedule`
-    states how batches advance it and what memory a scene holds. A model calls it from its own
-    `AbstractModel.stepper`, after refusing integrators it cannot run and preparing what it
-    computes once (its `system`)."""
+    """Numerical settings of a model's time integration (tolerances, bounds): the base of every integrator.
+
+    The one thing an integrator does is turn a run of a model into an `AbstractStepper` (`stepper`),
+    whose `Schedule` states how batches advance it and what memory a scene holds. A model calls it
+    from its own `AbstractModel.stepper`, after refusing integrators it cannot run and preparing
+    what it computes once (its `system`). Built-in: `EventIntegrator` (rigid), `SpringIntegrator`,
+    `GeneralizedAlpha` and `Checked` (spring).
+    """
 
     @abc.abstractmethod
     def stepper(self, model: "AbstractModel", system, save: Save | None = None, t1=None) -> "AbstractStepper":
-        """The run of `model` (prepared as `system`: model-specific, None where the model prepares
-        nothing) with these settings: a summary (`save` None) or a history at `save.ts` up to `t1`."""
+        """The run of `model` with these settings, as an `AbstractStepper`.
+
+        Arguments:
+            model: the model of the scene.
+            system (object): what the model prepared once (model-specific; None where it prepares nothing).
+            save: the output request; None: a summary that stops when the answer is fixed.
+            t1 (float | Array | None): end time [s] of a history run (`simulate` defaults it to the last save time).
+
+        Returns:
+            the stepper of one scene.
+        """
 
 
 class AbstractSpringIntegrator(AbstractIntegrator):
-    """An integrator of the spring model (`jaxrock.spring`): `SpringIntegrator` (diffrax) or
-    `GeneralizedAlpha`. Its `stepper` is given
+    """An integrator of the spring model (`jaxrock.spring`): `SpringIntegrator` (diffrax) or `GeneralizedAlpha`.
+
+    Its `stepper` is given
 
     - `model`: the `SpringModel` — `run_end(system, excitation, save, t1)` (when the run stops at
       the latest) and `watch(system)` (`jaxrock.bookkeeping.Watch`: the levels a run is watched
@@ -65,16 +78,26 @@ class AbstractSpringIntegrator(AbstractIntegrator):
 class Schedule(NamedTuple):
     """How a batch of scenes is advanced (`jaxrock.analyses.engine.run_batch`).
 
-    - `passes`: loop steps per pass, in order (the last repeats): between passes the scenes still
-      running are gathered into a smaller batch, so that finished ones stop costing. Empty: the
-      batch runs as one vmapped `AbstractStepper.solve` (a stepper whose loop is its integrator's).
-    - `smallest_batch`: the batch size below which gathering stops paying (a cheap step's batch
-      overhead is large).
-    - `bytes_per_scene`: memory a running scene holds beyond its inputs (sizes the batches).
-    - `lanes`: 0, every running cell in every pass; else at most this many cells per pass, those
-      already started first, so that a finished cell's place goes to the next one (for dear steps
-      whose cells differ widely in length: a batch does not wait for its slowest cell); a spectrum's
-      batches then hold at least 4 × `lanes` cells (`batch_unit`).
+    A stepper states it in `AbstractStepper.schedule`; the default, `Schedule()`, runs each batch as
+    one vmapped `solve`.
+
+    Attributes:
+        passes: loop steps per pass, in order (the last repeats): between passes the scenes still
+            running are gathered into a smaller batch, so that finished ones stop costing. Default
+            (): the batch runs as one vmapped `AbstractStepper.solve` (a stepper whose loop is its
+            integrator's).
+        smallest_batch: the batch size below which gathering stops paying (a cheap step's batch
+            overhead is large); default 64.
+        bytes_per_scene: memory [bytes] a running scene holds beyond its inputs (sizes the batches); default 0.
+        lanes: default 0: every running cell in every pass; else at most this many cells per pass,
+            those already started first, so that a finished cell's place goes to the next one (for
+            dear steps whose cells differ widely in length: a batch does not wait for its slowest
+            cell); a spectrum's batches then hold at least 4 × `lanes` cells (`batch_unit`).
+
+    Example:
+        ```python
+        jaxrock.Schedule(passes=(4, 8, 16, 32), smallest_batch=64)  # the rigid model's
+        ```
     """
 
     passes: tuple[int, ...] = ()
@@ -123,20 +146,42 @@ class AbstractStepper(eqx.Module):
 
     @abc.abstractmethod
     def init(self, excitation: AbstractExcitation) -> PyTree:
-        """The state at the excitation's start."""
+        """The state at the excitation's start.
+
+        Arguments:
+            excitation: the ground motion of the scene.
+        """
 
     @abc.abstractmethod
     def step(self, excitation: AbstractExcitation, state: PyTree) -> PyTree:
-        """One loop step; called only on a state that is not done (under `vmap`, a done lane's
-        result is discarded by the loop)."""
+        """One loop step; called only on a state that is not done.
+
+        Under `vmap`, a done lane's result is discarded by the loop.
+
+        Arguments:
+            excitation: the ground motion of the scene.
+            state: the state before the step.
+
+        Returns:
+            the state after the step.
+        """
 
     @abc.abstractmethod
     def done(self, state: PyTree) -> Bool[Array, ""]:
-        """Answer fixed, or no further step allowed."""
+        """Whether the answer is fixed, or no further step is allowed.
+
+        Arguments:
+            state: the current state.
+        """
 
     @abc.abstractmethod
     def finish(self, excitation: AbstractExcitation, state: PyTree) -> Solution:
-        """The run's `Solution` from its last state."""
+        """The run's `Solution` from its last state.
+
+        Arguments:
+            excitation: the ground motion of the scene.
+            state: the last state.
+        """
 
     @property
     def schedule(self) -> Schedule:
@@ -152,8 +197,19 @@ class AbstractStepper(eqx.Module):
         return ()
 
     def motion(self, state: PyTree) -> tuple[Float[Array, ""], Float[Array, ""], Float[Array, ""]]:
-        """(t, θ/α′, θ̇/α′) of a state: its time and base rotation (a run's sensitivity follows
-        their tangents, `jaxrock.sensitivity`)."""
+        """The time and base rotation of a state; a run's sensitivity follows their tangents (`jaxrock.sensitivity`).
+
+        Arguments:
+            state: a state of this stepper.
+
+        Returns:
+            t (Array): the time [s].
+            theta (Array): θ/α′ [–].
+            theta_dot (Array): θ̇/α′ [1/s].
+
+        Raises:
+            NotImplementedError: where the stepper does not expose its motion (the default).
+        """
         raise NotImplementedError(f"{type(self).__name__} does not expose its motion (AbstractStepper.motion)")
 
     @property
@@ -164,17 +220,38 @@ class AbstractStepper(eqx.Module):
         return False
 
     def join(self, excitation: AbstractExcitation, solutions: tuple[Solution, ...]) -> Solution:
-        """The `Solution` of the whole from its `parts`' (only where there are parts)."""
+        """The `Solution` of the whole from its `parts`' (only where there are parts).
+
+        Arguments:
+            excitation: the ground motion of the scene.
+            solutions: the parts' solutions, in the order of `parts`.
+
+        Raises:
+            NotImplementedError: where the stepper has no parts (the default).
+        """
         raise NotImplementedError(f"{type(self).__name__} has no parts to join")
 
     def advance(self, excitation: AbstractExcitation, state: PyTree, n) -> PyTree:
-        """At most `n` (may be traced) more steps; forward-mode loop."""
+        """At most `n` more steps (a forward-mode loop), stopping early when done.
+
+        Arguments:
+            excitation: the ground motion of the scene.
+            state: the state to go on from.
+            n (int | Array): the most steps to take (may be traced).
+
+        Returns:
+            the state after them.
+        """
         state, _ = jax.lax.while_loop(lambda sk: ~self.done(sk[0]) & (sk[1] < n),
                                       lambda sk: (self.step(excitation, sk[0]), sk[1] + 1), (state, 0))
         return state
 
     def solve(self, excitation: AbstractExcitation) -> Solution:
-        """init, step until done, finish."""
+        """The whole run: `init`, `step` until `done`, `finish`.
+
+        Arguments:
+            excitation: the ground motion of the scene.
+        """
         state = self.init(excitation)
         if self.max_steps > 0:
             body = lambda s: self.step(excitation, s)
@@ -268,23 +345,45 @@ class FirstStepController(WrappedController):
 
 
 class AbstractModel(eqx.Module):
-    """A rocking body model: rigid (`RigidModel`) or spring (`SpringModel`)."""
+    """A rocking body model: rigid (`RigidModel`) or spring (`SpringModel`); the base of every model.
+
+    A model is a value (an `eqx.Module` whose array leaves can be vmapped and differentiated) that
+    knows its geometry (`block`), its overturning threshold (overturned at |θ| ≥ threshold·α′) and
+    its default integrator, and pairs itself with an integrator into an `AbstractStepper`. A model
+    kind that scenes files name is registered with `register_model_kind`.
+    """
 
     block: eqx.AbstractVar[Block]
     threshold: eqx.AbstractVar[Float[Array, ""]]  # overturned at |θ| ≥ threshold·α′
 
     @abc.abstractmethod
     def default_integrator(self, autodiff: str | None = None) -> AbstractIntegrator:
-        """The integrator used when `simulate` is given none (under `jax.grad`: its reverse-mode
-        form); with `autodiff="forward"` or `"reverse"` the same settings differentiated in that mode
-        (forward: `jax.jvp`, `jax.jacfwd`, one pass per input, the cheaper choice for one or a few
-        parameters, e.g. `find_boundary`); None: the model's own choice."""
+        """The integrator used when `simulate` is given none (under `jax.grad`: its reverse-mode form).
+
+        Arguments:
+            autodiff: "forward" or "reverse": the same settings differentiated in that mode (forward:
+                `jax.jvp`, `jax.jacfwd`, one pass per input, the cheaper choice for one or a few
+                parameters, e.g. `find_boundary`); default None: the model's own choice.
+
+        Returns:
+            the integrator.
+        """
 
     @abc.abstractmethod
     def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> AbstractStepper:
-        """The run of a scene of this model with `integrator` as an `AbstractStepper`: a summary
-        (`save` None, stopping when the answer is fixed) or a time history at `save.ts` up to `t1`
-        (see `simulate`). A model refuses an integrator it cannot run with a `JaxrockInputError`."""
+        """The run of a scene of this model with `integrator` as an `AbstractStepper`.
+
+        Arguments:
+            integrator: the integration settings.
+            save: the output request; default None: a summary, stopping when the answer is fixed.
+            t1 (float | Array | None): end time [s] of a time history at `save.ts` (see `simulate`).
+
+        Returns:
+            the stepper of one scene.
+
+        Raises:
+            JaxrockInputError: when the model cannot run `integrator`.
+        """
 
     @property
     @abc.abstractmethod
@@ -316,13 +415,46 @@ def simulate(
       fixed (overturned; at rest after the excitation ended; or excitation over, so that the
       remaining free-rocking peaks can only decay).
     - With `save=Save(ts, fields)`, the requested time history is returned and the run goes on to
-      `t1` (default: the last save time); `t1` without `save` is refused.
+      `t1` (default: the last save time).
     - A parameter outside its limits (`limits()` of the block, model and excitation) is refused
       at construction; under `jax.vmap`/`jax.jit`, where it cannot be, the run returns
       `Status.invalid_input` with NaN numbers.
-    - With `sensitivity=True` the run carries the tangent of its motion along the excitation's
-      log-scale and reports `Solution.sensitivity` (`jaxrock.sensitivity`; forward mode: without
-      `integrator`, the model's forward-mode default).
+
+    The run is compiled once per structure (model kind, mesh, save request): repeated calls with
+    new numbers reuse it.
+
+    Arguments:
+        model: the model of the scene (`RigidModel`, a spring model), one scene's values.
+        excitation: the ground motion (a pulse, a `Record`, `StillGround`).
+        integrator: the integration settings; default None: `model.default_integrator()` (under
+            `jax.grad`, its reverse-mode form).
+        save: a time history request `Save(ts, fields)`; default None: the summary only.
+        t1 (float | Array | None): end time [s] of a history, > the excitation's `t_start`; only with
+            `save`; default None: the last save time.
+        sensitivity: carry the tangent of the motion along the excitation's log-scale and report
+            `Solution.sensitivity` and `Solution.uncertain` (`jaxrock.sensitivity`; forward mode:
+            without `integrator`, the model's forward-mode default); default False.
+
+    Returns:
+        the summary (and history) of the run; check `status`.
+
+    Raises:
+        JaxrockInputError: when `model` or `excitation` is not a jaxrock one; a parameter holds many
+            values (one scene: vmap `simulate` or use `run_batch`); `t1` is given without `save` or is
+            not after the excitation's start; a save field is not one the model gives; a save time is
+            beyond `t1`; the integrator cannot be differentiated in the mode asked (`jax.grad` through a
+            forward-mode loop, `jax.jvp` through a reverse-mode one, or `sensitivity` with a
+            reverse-mode integrator).
+
+    Example:
+        ```python
+        import jaxrock
+
+        block = jaxrock.Block.from_slenderness(10.0, 0.2)
+        pulse = jaxrock.RickerPulse(*jaxrock.pulse_of_ratios(block, 2.0, 3.0))
+        sol = jaxrock.simulate(jaxrock.RigidModel(block), pulse)
+        float(sol.max_theta)  # 0.446...
+        ```
     """
     if sensitivity:
         from .sensitivity import forward_integrator

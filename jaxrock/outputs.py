@@ -14,15 +14,25 @@ import numpy as np
 
 
 class Output(NamedTuple):
-    """One summary output of a run.
+    """One summary output of a run, declared once in `SUMMARY`.
 
-    - `name`: the field of `Solution` and `Spectrum`, the netCDF variable and the CSV column;
-    - `label`: how the command line's summaries call it;
-    - `meaning` (the netCDF long_name) and `units` (CF: "1" for ratios, flags and counts);
-    - `kind`: "float", "bool" or "int";
-    - `absent`: its value from a model that does not compute it (None: every model does);
-    - `needs`: the output it is computed with (None: none): where that one is not computed, neither
-      is this one (its `absent` value then means "not computed").
+    `Solution`'s fields, `Spectrum`'s arrays, the netCDF variables, the batch results file's columns
+    and the command line's summaries are generated from these declarations.
+
+    Attributes:
+        name: the field of `Solution` and `Spectrum`, the netCDF variable and the CSV column.
+        label: how the command line's summaries call it.
+        meaning: what it is (the netCDF long_name).
+        units: its CF units ("1" for ratios, flags and counts; "s" for times).
+        kind: "float", "bool" or "int".
+        absent: its value from a model that does not compute it; default None: every model does.
+        needs: the output it is computed with; default None: none. Where that one is not computed,
+            neither is this one (its `absent` value then means "not computed").
+
+    Example:
+        ```python
+        {o.name: o.units for o in jaxrock.SUMMARY}  # {'max_theta': '1', 'overturned': '1', ...}
+        ```
     """
 
     name: str
@@ -35,20 +45,30 @@ class Output(NamedTuple):
 
     @property
     def dtype(self) -> type:
+        """The NumPy dtype of its values (float64, bool or int64, by `kind`)."""
         return {"float": np.float64, "bool": np.bool_, "int": np.int64}[self.kind]
 
     @property
     def annotation(self):
+        """The `jaxtyping` annotation of its `Solution` field (a scalar array of its `kind`)."""
         from jaxtyping import Array, Bool, Float, Int
 
         return {"float": Float, "bool": Bool, "int": Int}[self.kind][Array, ""]
 
     def csv_value(self, x) -> float | int:
-        """The value a CSV cell holds (`jaxrock.io.tables.cell` writes it): floats exactly, flags 0/1."""
+        """The value a CSV cell holds (`jaxrock.io.tables.cell` writes it): floats exactly, flags 0/1.
+
+        Arguments:
+            x (float | bool | int): one scene's value.
+        """
         return float(x) if self.kind == "float" else int(x)
 
     def line(self, x) -> str:
-        """One scene's value as the command line prints it ("max θ/α = 0.663037", "overturned: no")."""
+        """One scene's value as the command line prints it ("max θ/α = 0.663037", "overturned: no").
+
+        Arguments:
+            x (float | bool | int): one scene's value.
+        """
         if self.kind == "bool":
             return f"{self.label}: {'yes' if bool(x) else 'no'}"
         if self.kind == "int":
@@ -60,7 +80,15 @@ class Output(NamedTuple):
         return f"{self.label} = {float(x):.6f}" if abs(float(x)) < 1e4 else f"{self.label} = {float(x):.6g}"
 
     def invalid(self, x, ok):
-        """`x` where `ok`, else what an invalid scene reports (NaN, no, or the absent value)."""
+        """`x` where `ok`, else what an invalid scene reports (NaN, no, or the absent value).
+
+        Arguments:
+            x (Array): the values (traceable).
+            ok (Array): whether each scene's parameters are within their limits.
+
+        Returns:
+            (Array): the values, with the invalid scenes' replaced.
+        """
         import jax.numpy as jnp
 
         if self.kind == "float":
@@ -88,6 +116,13 @@ SUMMARY: tuple[Output, ...] = (
            f"{MARGIN_OVERTURNED:g} once overturned) (jaxrock.sensitivity; no where the sensitivity is not computed)", "1", "bool",
            absent=False, needs="sensitivity"),
 )
+"""The summary outputs of a run, in order: one `Output` each.
+
+`max_theta`, `overturned`, `t_overturn`, `uplifted`, `t_uplift`, `n_impacts`, `sensitivity` and
+`uncertain`; `Solution`'s fields, `Spectrum`'s arrays, the netCDF variables and the results
+file's columns are generated from it. A new summary output is a line here and the code that
+computes it (`jaxrock.bookkeeping.Watch.solution`, or an integrator passing it there).
+"""
 OUTPUTS = {o.name: o for o in SUMMARY}
 RESULT_COLUMNS: tuple[str, ...] = (*OUTPUTS, "status")  # a results row: the summary, then the status name
 

@@ -77,11 +77,23 @@ def cpu_cores() -> int:
 
 
 def use_cpu_cores(n: int | None = None) -> None:
-    """Give JAX's CPU backend one device per core (`n` devices; None: `cpu_cores()`), so that a
-    sweep on a CPU runs one chunk per core (`jaxrock.run_sweep`: a device runs one computation at
-    a time, whatever its cores). Takes effect if called before JAX starts its backends (its first
-    computation); the command line calls it first thing. Left alone where `XLA_FLAGS` already sets
-    a host device count."""
+    """Give JAX's CPU backend one device per core, so that a sweep on a CPU runs one chunk per core.
+
+    A device runs one computation at a time, whatever its cores (`jaxrock.run_sweep`). Takes effect
+    if called before JAX starts its backends (its first computation); later, the backends keep their
+    devices. The command line calls it first thing. Left alone where `XLA_FLAGS` already sets a host
+    device count. Nothing is written to the environment.
+
+    Arguments:
+        n: the number of CPU devices; default None: the cores this process may run on (`cpu_cores()`).
+
+    Example:
+        ```python
+        import jaxrock
+
+        jaxrock.use_cpu_cores()  # before the first JAX computation
+        ```
+    """
     if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
         return
     n = cpu_cores() if n is None else int(n)

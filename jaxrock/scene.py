@@ -40,15 +40,39 @@ def _resolve(module: str, name: str):
 
 # -- model parameters ------------------------------------------------------------------------------
 class Param(NamedTuple):
-    """A numeric model parameter, declared once (issue 57): a scenes file's column and the model
-    builder's keyword (`name`); what it means (`meaning`, for tables and help; `long_name`, ASCII,
-    for stores) and its unit (`unit` as people write it, "–" for none; `units`, CF); its valid range
-    [lo, hi] (open ends where `lo_open`, `hi_open`); its default (None: the model computes it,
-    `default_text` says how) and, for a damping parameter, the value that dissipates nothing
-    (`undamped`); `neutral`, the value a run puts in place of an invalid one under `vmap`
-    (`jaxrock.model.guard_scene`; None: the default); `step`, where the values are whole multiples
-    of it (a sine pulse's half cycles). The command line's help, the scenes file's
-    table, the sweep's quantities, `UNDAMPED` and the neutral values are generated from it."""
+    """A numeric model (or pulse) parameter, declared once (issue 57).
+
+    The command line's help, the scenes file's table, the sweep's quantities, `UNDAMPED` and the
+    neutral values are generated from it. Give a model kind's parameters to `register_model_kind`,
+    a pulse kind's to `register_pulse_kind`.
+
+    Attributes:
+        name: a scenes file's column and the model builder's keyword.
+        meaning: what it means, for tables and help.
+        unit: its unit as people write it ("–" for none).
+        lo: lower end of the valid range.
+        hi: upper end of the valid range (`math.inf`: none).
+        lo_open: whether `lo` itself is refused; default False.
+        hi_open: whether `hi` itself is refused; default False.
+        default: its default; default None: the model computes it (`default_text` says how).
+        default_text: how the model computes the default, for tables; default "".
+        undamped: for a damping parameter, the value that dissipates nothing; default None.
+        long_name: an ASCII name for stores (netCDF long_name); default "".
+        units: its CF units; default "1".
+        neutral: the value a run puts in place of an invalid one under `vmap`
+            (`jaxrock.model.guard_scene`); default None: `default`.
+        step: where given, the values must be whole multiples of it (a sine pulse's half cycles);
+            default None.
+        option: the command line's flag where the name's own would not be lower case (`E`:
+            "--youngs-modulus"); default "".
+
+    Example:
+        ```python
+        import math
+
+        ZETA = jaxrock.Param("zeta", "column damping ratio", "–", 0.0, math.inf, hi_open=True, default=0.01)
+        ```
+    """
 
     name: str
     meaning: str
@@ -76,14 +100,30 @@ class Param(NamedTuple):
         return text if self.step is None else f"multiples of {self.step:g} in {text}"
 
     def check(self, x, name: str | None = None) -> None:
-        """Refuse, in one line naming `name` (default the parameter's), a value outside the valid
-        range or off its step (concrete values; a traced one is checked where it is made)."""
+        """Refuse, in one line, a value outside the valid range or off its step.
+
+        Concrete values only; a traced one is checked where it is made.
+
+        Arguments:
+            x (float | ArrayLike): the value(s).
+            name: the name the message gives; default None: the parameter's.
+
+        Raises:
+            JaxrockInputError: when a value is not finite, is outside [lo, hi] or is off `step`.
+        """
         check_range(name or self.name, x, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open)
         if is_concrete(x):
             self.check_step(x, name)
 
     def off_step(self, x):
-        """Where the values `x` (an array) are not whole multiples of `step` (none without one)."""
+        """Where the values `x` are not whole multiples of `step` (nowhere without one).
+
+        Arguments:
+            x (ArrayLike): the values.
+
+        Returns:
+            (numpy.ndarray): a boolean array of the shape of `x`.
+        """
         import numpy as np
 
         x = np.asarray(x, dtype=float)
@@ -92,7 +132,15 @@ class Param(NamedTuple):
         return np.isfinite(x) & (x / self.step != np.round(x / self.step))
 
     def check_step(self, x, name: str | None = None) -> None:
-        """Refuse, in one line, a value that is not a whole multiple of `step`."""
+        """Refuse, in one line, a value that is not a whole multiple of `step`.
+
+        Arguments:
+            x (ArrayLike): the value(s).
+            name: the name the message gives; default None: the parameter's.
+
+        Raises:
+            JaxrockInputError: when a value is off `step`.
+        """
         import numpy as np
 
         bad = self.off_step(x)
@@ -101,6 +149,7 @@ class Param(NamedTuple):
 
     @property
     def range(self) -> tuple[float, float, bool, bool]:
+        """(lo, hi, lo_open, hi_open)."""
         return self.lo, self.hi, self.lo_open, self.hi_open
 
     @property
@@ -122,12 +171,22 @@ ZETA_COLUMN = Param("zeta", "column damping ratio, first fixed-base mode", "–"
 
 # -- model kinds -----------------------------------------------------------------------------------
 class ModelKind(NamedTuple):
-    """A model kind that scenes files name (`jaxrock.io.scenes_file`'s `model` column, the CLI's `--model`):
-    `build(block, **parameters)` makes the model of one scene (traceable: batches vmap it), from the
-    scene's `Block` and the values of its `parameters` (batch columns, e.g. `eta`, `cbar`, `E`; a
-    parameter left out is not passed, so the builder's default applies). `build` may be named as
-    "module:function", imported when a model is first made (the built-in kinds are). `params`: the
-    numeric ones' declarations (`Param`), by name."""
+    """A model kind that scenes files name (`jaxrock.io.scenes_file`'s `model` column, the CLI's `--model`).
+
+    Made by `register_model_kind`. `build(block, **parameters)` makes the model of one scene
+    (traceable: batches vmap it), from the scene's `Block` and the values of its `parameters`
+    (batch columns, e.g. `eta`, `cbar`, `E`; a parameter left out is not passed, so the builder's
+    default applies).
+
+    Attributes:
+        name: the kind's name (lower case, no commas).
+        build: the builder `(block, **parameters) → model`, or its name "module:function", imported
+            when a model is first made (the built-in kinds are).
+        parameters: the names of the parameters it takes (numeric ones and options such as
+            `backbone`); default ().
+        description: one line for help and tables; default "".
+        params: the numeric parameters' declarations (`Param`), by name; default {}.
+    """
 
     name: str
     build: Callable | str  # (jaxrock.Block, **parameters) → a jaxrock model
@@ -136,7 +195,15 @@ class ModelKind(NamedTuple):
     params: dict = {}
 
     def model(self, block, **parameters):
-        """The model of one scene: `build(block, **parameters)`."""
+        """The model of one scene: `build(block, **parameters)`.
+
+        Arguments:
+            block (Block): the scene's geometry.
+            **parameters (float | Array): the kind's parameters given (the builder's defaults for the others).
+
+        Returns:
+            (AbstractModel): the model.
+        """
         build = _resolve(*self.build.split(":")) if isinstance(self.build, str) else self.build
         return build(block, **parameters)
 
@@ -146,8 +213,33 @@ MODEL_KINDS: dict[str, ModelKind] = {}
 
 def register_model_kind(name: str, build: Callable | str, parameters: tuple[str | Param, ...] = (), description: str = "") -> ModelKind:
     """Make a model kind nameable in scenes files (`jaxrock.io.scenes_file`) and the command line.
-    `parameters`: its numeric parameters as `Param`s (a built-in one, e.g. `ZETA_COLUMN`, or its
-    own), its other options (`backbone`, `smoothing`) by name."""
+
+    A kind registered under a name already taken replaces it. Other packages register theirs from
+    a module named by an entry point of the group "jaxrock.models" or by the variable
+    `JAXROCK_PLUGINS` (`load_plugins`).
+
+    Arguments:
+        name: the kind's name, lower case, without commas.
+        build: the builder `(block, **parameters) → model` (traceable: batches vmap it), or its name
+            "module:function", imported when a model is first made.
+        parameters: its numeric parameters as `Param`s (a built-in one, e.g. `ZETA_COLUMN`, or its
+            own), its other options (`backbone`, `smoothing`) by name; default ().
+        description: one line for help and tables; default "".
+
+    Returns:
+        the registered kind.
+
+    Raises:
+        JaxrockInputError: when `name` is empty, not lower case or holds a comma.
+
+    Example:
+        ```python
+        def build(block, eta=None):
+            return jaxrock.RigidModel(block, eta=eta, threshold=0.9)
+
+        jaxrock.register_model_kind("rigid-09", build, (jaxrock.scene.ETA,), "rigid, overturned at 0.9 α′")
+        ```
+    """
     if not name or name != name.lower() or "," in name:
         raise JaxrockInputError(f"model kind {name!r}: a lower-case name without commas")
     params = {p.name: p for p in parameters if isinstance(p, Param)}
@@ -221,10 +313,25 @@ PULSE_PARAMS: dict[str, dict[str, Param]] = {}  # name → its parameters beyond
 
 
 def register_pulse_kind(name: str, cls: str | Callable, parameters: tuple[Param, ...] = ()) -> None:
-    """Make a pulse kind nameable (`pulse=` of spectra and sweeps, a scenes file's `pulse`, the
-    CLI's `--pulse`): `cls(a_p, omega_p, **parameters)` makes one pulse (traceable: batches vmap
-    it; a class of `jaxrock.excitation` may be named by its name), `parameters` its numeric
-    parameters beyond a_p and ω_p as `Param`s (flags, scenes-file columns, sweep quantities)."""
+    """Make a pulse kind nameable: `pulse=` of spectra and sweeps, a scenes file's `pulse`, the CLI's `--pulse`.
+
+    A kind registered under a name already taken replaces it.
+
+    Arguments:
+        name: the kind's name, lower case, without commas.
+        cls: `cls(a_p, omega_p, **parameters)` makes one pulse (traceable: batches vmap it); a class
+            of `jaxrock.excitation` may be named by its name (e.g. "SinePulse").
+        parameters: its numeric parameters beyond a_p and ω_p as `Param`s (flags, scenes-file
+            columns, sweep quantities); default ().
+
+    Raises:
+        JaxrockInputError: when `name` is empty, not lower case or holds a comma.
+
+    Example:
+        ```python
+        jaxrock.register_pulse_kind("half-sine", lambda a_p, omega_p: jaxrock.SinePulse(a_p, omega_p, n_cycles=0.5))
+        ```
+    """
     if not name or name != name.lower() or "," in name:
         raise JaxrockInputError(f"pulse kind {name!r}: a lower-case name without commas")
     PULSES[name] = cls
@@ -333,7 +440,17 @@ BACKBONES = {"bilinear": "Bilinear", "tanh": "Tanh"}  # name → a class of jaxr
 # (`SpringIntegrator`) and step ends of generalized-α, so derivatives through it are the motion's
 # (`bench_backbone.py --part gradients`).
 DEFAULT_BACKBONE = {"quasi-rigid": "bilinear", "flexible": "bilinear"}  # per spring model
+"""The base spring's default backbone per spring model ("quasi-rigid", "flexible"): "bilinear" for both.
+
+The bilinear backbone at θy = 1e-5 α′ (the paper's rigid-plastic spring as OpenSees' multilinear one)
+is within 8.3e-4 in max |θ|/α of the sharp limit wherever that limit is settled (benchmarks/bench_backbone.py:
+192 quasi-rigid and 48 flexible scenes); tanh at θs = 1e-4 α′, the default before, left up to 4.9e-2.
+"""
 DEFAULT_SMOOTHING = {"bilinear": 1e-5, "tanh": 1e-4}  # θs/α′ per backbone
+"""The default pre-yield rotation θs/α′ of the base spring, per backbone: bilinear 1e-5, tanh 1e-4.
+
+A spring model given no `smoothing` takes its backbone's; a backbone without an entry needs one, in (0, 1).
+"""
 
 
 def default_spring(flexible: bool, backbone=None, smoothing=None):

@@ -65,38 +65,55 @@ RECORD_TOLERANCES = (1e-12, 1e-14)  # and on sampled records (its docstring)
 
 
 class EventIntegrator(AbstractIntegrator):
-    """Settings of the rigid model's event-driven integration.
+    """Settings of the rigid model's event-driven integration (`RigidModel`'s default integrator).
 
-    - `solver`: an explicit diffrax solver (default `Tsit5`: on the benchmark grid it reaches a
-      given error in θ/α at about half the cost of `Dopri8`, whose 13 stages do not pay back at
-      the step sizes the excitation and the events impose; see benchmarks/bench_rigid.py).
-    - `rtol`, `atol`: step-size control tolerances (on θ [rad] and θ̇ [rad/s]); None: by the
-      excitation (`tolerances`), an `atol` left None is rtol/100.
-      Analytic pulses: 1e-8, 1e-10 (`PULSE_TOLERANCES`): max |Δ max θ/α′| ≤ 1.4e-7 against a
-      converged reference on the benchmark's 64 × 64 pulse grid and three more families of
-      32 × 32 (other slenderness, size and pulse shape; benchmarks/bench_rigid.py), the error
-      falling with rtol (8e-10 at 1e-10, 3e-11 at 1e-12).
-      Sampled records: 1e-12, 1e-14 (`RECORD_TOLERANCES`): on the record suite of
-      benchmarks/bench_suite.py (11 records, 59 cells against SciPy at rtol 1e-12;
-      results/bench_suite_rtol.txt) max |Δθ|/α′ falls from 2.4e-5 at 1e-8 to 6.9e-7 at 1e-11 and
-      3.6e-7 at 1e-12, for 16 % more time than at 1e-8: a record's steps are capped by its
-      samples, so a tighter tolerance costs little there, where on a pulse every step is the
-      tolerance's.
-    - `root_tol`: tolerance of the root finds that locate the events [s].
-    - `zeno_time`, `zeno_velocity`: Zeno closure thresholds, in units of 1/p′ and p′α′ (see
-      module docstring).
-    - `chunk_steps`: length of one loop iteration, in nominal steps (step attempts in a paced
-      record run). Under `vmap` all lanes move
-      in lock-step, one loop iteration at a time; cutting segments into time windows of about this
-      many steps keeps a lane that chatters through many short segments from making every other
-      lane wait a whole long segment per impact (measured in benchmarks/bench_rigid.py). Windows
-      are cut in time, not by diffrax's `max_steps`: under `vmap`, diffrax 0.7 returns the state
-      of the last *attempted* step for a lane stopped by `max_steps` while another lane had an
-      event, which may be a rejected step.
-    - `max_steps`: bound on steps per window; `max_iterations`: bound on loop iterations
-      (segments + windows) per run; hitting either is reported as a `Status`.
-    - `autodiff`: `"reverse"` (default: `jax.grad`, `jax.jacrev`) or `"forward"` (`jax.jvp`,
-      `jax.jacfwd`); see `model.diffrax_adjoint`.
+    The motion is a sequence of rest and rocking segments, each rocking one integrated by a diffrax
+    solver until an impact, apex or overturning event, with Zeno sequences closed in closed form
+    (`jaxrock.rigid.event_integrator`)..
+
+    Default tolerances, analytic pulses: 1e-8, 1e-10 (`PULSE_TOLERANCES`): max |Δ max θ/α′| ≤ 1.4e-7
+    against a converged reference on the benchmark's 64 × 64 pulse grid and three more families of
+    32 × 32 (other slenderness, size and pulse shape; benchmarks/bench_rigid.py), the error falling
+    with rtol (8e-10 at 1e-10, 3e-11 at 1e-12). Sampled records: 1e-12, 1e-14 (`RECORD_TOLERANCES`):
+    on the record suite of benchmarks/bench_suite.py (11 records, 59 cells against SciPy at rtol
+    1e-12; results/bench_suite_rtol.txt) max |Δθ|/α′ falls from 2.4e-5 at 1e-8 to 6.9e-7 at 1e-11 and
+    3.6e-7 at 1e-12, for 16 % more time than at 1e-8: a record's steps are capped by its samples, so
+    a tighter tolerance costs little there, where on a pulse every step is the tolerance's.
+
+    Attributes:
+        solver: an explicit diffrax solver; default `Tsit5()`: on the benchmark grid it reaches a
+            given error in θ/α at about half the cost of `Dopri8`, whose 13 stages do not pay back at
+            the step sizes the excitation and the events impose (benchmarks/bench_rigid.py).
+        rtol: relative step-size tolerance (on θ [rad] and θ̇ [rad/s]), > 0; default None: by the
+            excitation (`tolerances`: 1e-8 on pulses, 1e-12 on records).
+        atol: absolute step-size tolerance, > 0; default None: by the excitation (1e-10 on pulses,
+            1e-14 on records), or rtol/100 where `rtol` is given.
+        root_tol: tolerance of the root finds that locate the events [s]; default 1e-13.
+        zeno_time: Zeno closure threshold on the remaining flights' duration, in units of 1/p′;
+            default 1e-4.
+        zeno_velocity: Zeno closure threshold on the post-impact velocity, in units of p′α′; default 1e-9.
+        chunk_steps: length of one loop iteration, in nominal steps (step attempts in a paced record
+            run); default 16. Under `vmap` all lanes move in lock-step, one loop iteration at a time;
+            cutting segments into time windows of about this many steps keeps a lane that chatters
+            through many short segments from making every other lane wait a whole long segment per
+            impact (benchmarks/bench_rigid.py). Windows are cut in time, not by diffrax's `max_steps`:
+            under `vmap`, diffrax 0.7 returns the state of the last *attempted* step for a lane
+            stopped by `max_steps` while another lane had an event, which may be a rejected step.
+        max_steps: bound on steps per window (static); default 4096; hitting it is reported as
+            `Status.max_steps`.
+        max_iterations: bound on loop iterations (segments + windows) per run (static); default
+            100_000; hitting it is reported as `Status.max_iterations`.
+        autodiff: "reverse" (default: `jax.grad`, `jax.jacrev`) or "forward" (`jax.jvp`,
+            `jax.jacfwd`) (static); see `jaxrock.model.diffrax_adjoint`.
+
+    Raises:
+        JaxrockInputError: when `autodiff` is neither "reverse" nor "forward".
+
+    Example:
+        ```python
+        integrator = jaxrock.EventIntegrator(rtol=1e-10, autodiff="forward")
+        sol = jaxrock.simulate(model, pulse, integrator=integrator)
+        ```
     """
 
     solver: diffrax.AbstractSolver = diffrax.Tsit5()
@@ -114,15 +131,32 @@ class EventIntegrator(AbstractIntegrator):
         check_autodiff(self.autodiff)
 
     def tolerances(self, exc: AbstractExcitation) -> tuple[float, float]:
-        """(rtol, atol) on `exc`: the fields where given, else `RECORD_TOLERANCES` on a sampled
-        record and `PULSE_TOLERANCES` on anything else; atol = rtol/100 where only rtol is given."""
+        """The step-size tolerances on `exc`.
+
+        The fields where given, else `RECORD_TOLERANCES` on a sampled record and `PULSE_TOLERANCES`
+        on anything else; atol = rtol/100 where only rtol is given.
+
+        Arguments:
+            exc: the excitation of the run.
+
+        Returns:
+            rtol (float): the relative tolerance.
+            atol (float): the absolute tolerance.
+        """
         rtol0, atol0 = RECORD_TOLERANCES if isinstance(exc, SampledRecord) else PULSE_TOLERANCES
         rtol = rtol0 if self.rtol is None else self.rtol
         atol = (atol0 if self.rtol is None else 1e-2 * rtol) if self.atol is None else self.atol
         return rtol, atol
 
     def stepper(self, model: "RigidModel", system=None, save: Save | None = None, t1=None) -> "RigidStepper":
-        """`AbstractIntegrator.stepper`: the segment loop, one segment or window per step."""
+        """`AbstractIntegrator.stepper`: the segment loop, one segment or window per step.
+
+        Arguments:
+            model: the rigid model of the scene.
+            system (None): unused (the rigid model prepares nothing).
+            save: the output request; default None: a summary.
+            t1 (float | Array | None): end time [s] of a time history.
+        """
         return RigidStepper(model, self, save, t1)
 
 

@@ -19,13 +19,27 @@ from .event_integrator import EventIntegrator, RigidStepper
 class RigidModel(AbstractModel):
     """Housner's rigid rocking block (eq. 2), or a rigid column on an extended rigid base (eq. 22).
 
-    - `block`: the geometry (`Block`); the rocking quantities α′, p′, η′ are taken from it.
-    - `eta`: the angular-velocity ratio η across an impact (r = η², eq. 3); None → the block's η′
-      (eq. 3, resolved here: the field is always an array); 1 → undamped.
-    - `threshold`: overturned when |θ| ≥ threshold·α′ (default 1; an array).
+    Impacts by eq. 3; run by events (`EventIntegrator`, its default integrator). The block's
+    parameters resolved here (η′) depend on its slenderness only: a model whose block is replaced
+    by one of another size (`record_overturning_scale`) stays correct. The model kind "rigid".
 
-    The block's parameters resolved here (η′) depend on its slenderness only: a model whose
-    block is replaced by one of another size (`record_overturning_scale`) stays correct.
+    Arguments:
+        block: the geometry; the rocking quantities α′, p′, η′ are taken from it.
+        eta (float | Array | None): the angular-velocity ratio η across an impact (r = η², eq. 3) [–],
+            in [0, 1]; 1: undamped; default None: the block's η′ (eq. 3, resolved here: the field is
+            always an array).
+        threshold (float | Array): overturned when |θ| ≥ threshold·α′ [–], in (0, 1]; default 1.
+
+    Raises:
+        JaxrockInputError: when `block` is not a `Block`, or a concrete `eta` or `threshold` is
+            outside its range.
+
+    Example:
+        ```python
+        block = jaxrock.Block.from_slenderness(10.0, 0.2)
+        model = jaxrock.RigidModel(block)  # η = η′ = 1 − 1.5 sin²α = 0.942
+        sol = jaxrock.simulate(model, jaxrock.RickerPulse(3.924, 3.604))
+        ```
     """
 
     block: Block
@@ -46,13 +60,26 @@ class RigidModel(AbstractModel):
 
     @property
     def history_fields(self):
+        """The fields a time history can hold: "theta" [rad] and "theta_dot" [rad/s]."""
         return ("theta", "theta_dot")
 
     def default_integrator(self, autodiff: str | None = None) -> EventIntegrator:
+        """`EventIntegrator()` with its default settings.
+
+        Arguments:
+            autodiff: "reverse" or "forward"; default None: "reverse".
+        """
         return EventIntegrator(autodiff=autodiff or "reverse")
 
     def acceleration(self, t, theta, side, excitation: AbstractExcitation):
-        """θ̈ about the corner on `side` (±1), eq. 2 / eq. 22."""
+        """θ̈ about the corner on `side`, eq. 2 / eq. 22 [rad/s²].
+
+        Arguments:
+            t (float | Array): time [s].
+            theta (float | Array): rotation θ [rad].
+            side (float | Array): the rocking corner, ±1.
+            excitation: the ground motion.
+        """
         a, p = self.block.alpha_r, self.block.p_r
         phi = side * a - theta
         return -(p**2) * (jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
@@ -69,23 +96,57 @@ class RigidModel(AbstractModel):
         return over, a - jnp.arccos(jnp.where(over, jnp.cos(a), jnp.maximum(c, -1.0)))
 
     def free_peak(self, theta, theta_dot, side):
-        """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side` (`jaxrock.rigid.event_integrator`):
-        the threshold if it overturns."""
+        """Closed-form next peak |θ|/α′ of free rocking from (θ, θ̇) on `side`: the threshold if it overturns.
+
+        Energy is conserved between impacts and multiplied by η² at each (`jaxrock.rigid.event_integrator`).
+
+        Arguments:
+            theta (float | Array): rotation θ [rad].
+            theta_dot (float | Array): angular velocity θ̇ [rad/s].
+            side (float | Array): the rocking corner, ±1.
+
+        Returns:
+            (Array): the next peak |θ|/α′ [–].
+        """
         over, peak = self._free(theta, theta_dot, side)
         return jnp.where(over, self.threshold, peak / self.block.alpha_r)
 
     def free_rotation(self, theta, theta_dot, side):
-        """The same next peak as a rotation |θ| [rad] (threshold·α′ if it overturns)."""
+        """The same next peak as `free_peak`, as a rotation |θ| [rad] (threshold·α′ if it overturns).
+
+        Arguments:
+            theta (float | Array): rotation θ [rad].
+            theta_dot (float | Array): angular velocity θ̇ [rad/s].
+            side (float | Array): the rocking corner, ±1.
+
+        Returns:
+            (Array): the next peak |θ| [rad].
+        """
         over, peak = self._free(theta, theta_dot, side)
         return jnp.where(over, self.threshold * self.block.alpha_r, peak)
 
     def watch(self, system=None) -> Watch:
-        """The levels a run is watched against (`jaxrock.bookkeeping`): overturning at threshold·α′;
-        uplift as soon as |θ| > 0 (the block leaves rest when |üg| > g tanα′)."""
+        """The levels a run is watched against (`jaxrock.bookkeeping`).
+
+        Overturning at threshold·α′; uplift as soon as |θ| > 0 (the block leaves rest when |üg| > g tanα′).
+
+        Arguments:
+            system (None): unused (the rigid model prepares nothing).
+        """
         alpha = self.block.alpha_r
         return Watch(alpha=alpha, threshold=self.threshold, overturn=self.threshold * alpha, uplift=jnp.zeros_like(alpha))
 
     def stepper(self, integrator: AbstractIntegrator, save: Save | None = None, t1=None) -> "RigidStepper":
+        """The run of a scene of this model (`AbstractModel.stepper`).
+
+        Arguments:
+            integrator: an `EventIntegrator`.
+            save: the output request; default None: a summary.
+            t1 (float | Array | None): end time [s] of a time history.
+
+        Raises:
+            JaxrockInputError: when `integrator` is not an `EventIntegrator`.
+        """
         if not isinstance(integrator, EventIntegrator):
             raise JaxrockInputError(f"RigidModel needs an EventIntegrator, got {type(integrator).__name__}")
         return integrator.stepper(self, None, save, t1)  # the rigid model prepares nothing
