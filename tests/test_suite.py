@@ -281,6 +281,8 @@ def test_suite_command_writes_the_dataset_tables_and_figures(tmp_path):
         fit = jr.fit_lognormal(x, p, np.repeat(np.arange(x.shape[0])[:, None], x.shape[1], 1), n_boot=50)
         assert float(row["median"]) == fit["median"] and float(row["beta"]) == fit["beta"]
         assert float(row["n_overturned"]) == pytest.approx(p.sum())
+    table = [line for line in (tmp_path / "s" / "fragility.md").read_text(encoding="utf-8").splitlines() if line.startswith("|")]
+    assert len(table) == 2 + len(rows) and len({line.count("|") for line in table}) == 1 and "|  |" not in table[0], table
     least_rows = read_csv(tmp_path / "s" / "least_scale.csv")
     assert all(np.isfinite(float(row["least_scale"])) == (row["bracket_low"] != "nan") for row in least_rows)
     # every run's verdict judged (the suite's default): its flag is its own numbers', and a least
