@@ -63,3 +63,28 @@ def test_license_citation_and_metadata_agree():
     assert "## [Unreleased]" in changelog
     released = re.findall(r"^## \[(\d+\.\d+\.\d+)\]", changelog, flags=re.M)
     assert released and re.search(rf"^version: {re.escape(released[0])}$", cff, flags=re.M), "CITATION.cff cites the latest release"
+
+
+def test_declared_floors_are_the_checked_minimums():
+    """Each dependency's floor in pyproject.toml is its pin in .ci/minimums.txt, the set CI installs
+    and runs the smoke tests on (.ci/minimums): a floor raised or lowered without that check fails."""
+    from packaging.requirements import Requirement
+    from packaging.version import Version
+
+    deps = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["dependencies"]
+    floors = {}
+    for dep in deps:
+        req = Requirement(dep)
+        (spec,) = [s for s in req.specifier if s.operator == ">="]
+        floors[req.name.lower()] = Version(spec.version)
+    pins = {}
+    for line in (ROOT / ".ci" / "minimums.txt").read_text(encoding="utf-8").splitlines():
+        line = line.split("#")[0].strip()
+        if line:
+            name, version = line.split("==")
+            pins[name.strip().lower()] = Version(version)
+    assert pins.pop("jaxlib") == pins["jax"]  # jaxlib moves with jax
+    assert pins == floors
+    smoke = [line for line in (ROOT / ".ci" / "smoke_tests.txt").read_text(encoding="utf-8").splitlines()
+             if line.strip() and not line.startswith("#")]
+    assert smoke and all((ROOT / path).is_file() for path in smoke)
