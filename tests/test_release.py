@@ -88,3 +88,32 @@ def test_declared_floors_are_the_checked_minimums():
     smoke = [line for line in (ROOT / ".ci" / "smoke_tests.txt").read_text(encoding="utf-8").splitlines()
              if line.strip() and not line.startswith("#")]
     assert smoke and all((ROOT / path).is_file() for path in smoke)
+
+
+def test_an_editable_install_names_the_commit_that_runs(tmp_path, monkeypatch):
+    """After a commit or a pull, an editable install's version (fixed at install) gains
+    `.head.<commit>`: a store or checkpoint made before is not resumed as if it matched. The
+    checkout's HEAD is read from `.git` for a branch, a packed ref and a detached HEAD."""
+    from jaxrock import cache
+    from jaxrock._version import commit_id, version
+
+    git = tmp_path / ".git"
+    (git / "refs" / "heads").mkdir(parents=True)
+    (git / "HEAD").write_text("ref: refs/heads/main\n")
+    (git / "refs" / "heads" / "main").write_text("a" * 40 + "\n")
+    assert cache._checkout_head(git) == "a" * 40
+    (git / "refs" / "heads" / "main").unlink()
+    (git / "packed-refs").write_text("# pack-refs with: peeled\n" + "b" * 40 + " refs/heads/main\n")
+    assert cache._checkout_head(git) == "b" * 40
+    (git / "HEAD").write_text("c" * 40 + "\n")
+    assert cache._checkout_head(git) == "c" * 40
+    assert cache._checkout_head(tmp_path / "nothing") is None
+
+    monkeypatch.setattr(cache, "_checkout_head", lambda: "d" * 40)
+    moved = cache.package_version()
+    assert moved.startswith(version) and moved.endswith(".head." + "d" * 9) and PEP440.match(moved), moved
+    if commit_id:
+        monkeypatch.setattr(cache, "_checkout_head", lambda: commit_id.removeprefix("g") + "0" * 20)
+        assert cache.package_version() == version  # the installed commit: the installed version
+    monkeypatch.setattr(cache, "_checkout_head", lambda: None)
+    assert cache.package_version() == version  # an installed wheel

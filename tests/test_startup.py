@@ -79,9 +79,10 @@ print(json.dumps({"dtype": str(jnp.asarray(1.0).dtype), "cache": jax.config.jax_
 
 
 def _version() -> str:
-    from jaxrock.cache import package_version
+    """The cache folder's version: the release part of jaxrock's (builds between two releases share it)."""
+    from jaxrock.cache import _release
 
-    return package_version()
+    return _release()
 
 
 def test_every_public_name_resolves():
