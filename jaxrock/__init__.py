@@ -1,6 +1,6 @@
 """jaxrock: differentiable, vmappable rocking-body simulation (rigid and spring models) in JAX.
 
-Layers, top-down (each imports only from its own layer and those below; README "Layout"):
+Layers, top-down (each imports only from its own layer and those below; docs/development.md, "Layout"):
 front ends (`cli`, `reports`, `plotting`) → analyses (`analyses`: the batch engine, spectra,
 calibration, scenes files) → input/output (`io`) → models with their integrators (`rigid`,
 `spring`) → the protocol (`model`: model → stepper, `simulate`; `bookkeeping`: what a run records)

@@ -1,4 +1,4 @@
-"""The package's import graph reads top-down (README "Layout"): a module imports only from its own
+"""The package's import graph reads top-down (docs/development.md, "Layout"): a module imports only from its own
 layer or the layers below it — front ends → analyses → input/output → models → protocol → values →
 vocabulary → internals — so that, e.g., a model never reaches for an analysis and the I/O never for a figure."""
 

@@ -16,7 +16,7 @@ paper's missing eq. 13). The paper fitted c̄ by hand ("based on the data in Fig
   and the calibration plot (PNG); what the CLI command ``jaxrock calibrate`` prints.
 
 r_eq² depends on θ₀/α, so no single c̄ matches the target at every angle; the residual reported
-is the RMS over the angles. What the calibration finds against eq. 17 is in the README
+is the RMS over the angles. What the calibration finds against eq. 17 is in docs/guide/spectra.md
 ("Reproducing the paper"), as `jaxrock calibrate` measures it.
 """
 

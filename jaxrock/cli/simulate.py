@@ -47,7 +47,7 @@ def simulate(
                                  "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),
     undamped: bool = typer.Option(False, "--undamped", help=UNDAMPED_HELP),
     backbone: Optional[BackboneKind] = typer.Option(None, help=f"spring: base-spring backbone (default {BACKBONE_DEFAULTS}; the bilinear "
-                                                    "at θy = 1e-5 α′ is within 1e-3 of the sharp limit, README)"),
+                                                    "at θy = 1e-5 α′ is within 1e-3 of the sharp limit, docs/numerics.md)"),
     smoothing: Optional[float] = typer.Option(None, help=f"spring: pre-yield rotation θs/α′ in (0, 1) (default {SMOOTHING_DEFAULTS})"),
     tol: Optional[float] = typer.Option(None, help=TOL_HELP),
     plot: Optional[str] = typer.Option(None, help="write a time-history plot here (PNG; another suffix matplotlib knows, e.g. .pdf, "

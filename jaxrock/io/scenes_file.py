@@ -14,7 +14,7 @@ Label columns are copied to the results unchanged: `id`, `name`, `label`, `group
 `notes`, `comment`, or any name starting with `x_`. Any other column is an error that names the
 closest valid one (a misspelt `modle` would otherwise run the default model). A parameter given
 for a model or pulse it does not apply to (e.g. `eta` for a spring model, `scale` for a pulse) is
-an error. Every row is checked before anything runs, a column at a time (vectorised; README for
+an error. Every row is checked before anything runs, a column at a time (vectorised; docs/guide/batch.md for
 its speed); a bad row stops the run with a message naming the file, the row (and its line), the
 column and the valid range.
 

@@ -39,7 +39,7 @@ HOLDS, FLAGGED, OFF, NOT_FINITE, NO_REFERENCE = "holds", "flagged", "ok but off"
 VERDICTS = (HOLDS, FLAGGED, OFF, NOT_FINITE, NO_REFERENCE)
 MODELS = ("rigid", "quasi-rigid", "flexible")
 #: the stated accuracy of each model's default in max |θ|/α′: the RM's and the quasi-rigid SM's
-#: work–precision targets (README), and the flexible default's `Checked` accuracy
+#: work–precision targets (docs/numerics.md), and the flexible default's `Checked` accuracy
 ACCURACY = {"rigid": 1e-6, "quasi-rigid": 1e-6, "flexible": 1e-2}
 COLUMNS = ("case", "group", "model", "finite", "status", "max_theta", "reference", "error", "accuracy", "verdict", "ms")
 

@@ -22,7 +22,7 @@ warm call); a grid's per scene is the whole vmapped `overturning_spectrum` over 
 and OpenSees' per run (OpenSees' includes building its model, as its users run it).
 
 Written: `work_precision.csv` (every point), `work_precision.md` (a table per panel and the
-defaults' table the README quotes) and `work_precision.png`.
+defaults' table docs/numerics.md quotes) and `work_precision.png`.
 """
 
 from __future__ import annotations

@@ -47,7 +47,7 @@ class AbstractSpringModel(AbstractModel):
     (quasi-rigid and flexible); with the flexible default integrator
     `Checked(GeneralizedAlpha(1e-5, 1e-5))` the total error (spring and steps) is 4.9e-5 – 7.0e-5
     median, 6.6e-3 – 2.5e-2 at most (tanh at 1e-4: 5.5e-4 – 7.9e-4, 2.4e-2 – 3.5e-2), the largest,
-    in a probe, on runs it flags `inaccurate` (README, "Numerics"); `Checked(GeneralizedAlpha(1e-6,
+    in a probe, on runs it flags `inaccurate` (docs/numerics.md); `Checked(GeneralizedAlpha(1e-6,
     1e-6))` came near 1e-3 there at about twice the cost. Derivatives through the kinks are the
     motion's with either integrator (both end their steps on the kinks).
 
@@ -103,7 +103,7 @@ class AbstractSpringModel(AbstractModel):
         """The integrator a run takes by default: the work–precision choice.
 
         Chosen by `jaxrock work-precision` and `benchmarks/bench_spring.py`; the measured errors and
-        costs, and the alternatives, are in the README, "Numerics and performance":
+        costs, and the alternatives, are in docs/numerics.md:
 
         - quasi-rigid → explicit Tsit5 at rtol = atol = 1e-10 after the exact pre-yield phase
           (`jaxrock.spring.rest`: until the block first yields, its linear equation is stepped
