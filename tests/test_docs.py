@@ -46,7 +46,8 @@ def test_readme_is_one_screen_and_says_the_essentials():
     assert len(blocks(README, "python")) == 1 and len(commands(README)) >= 6
 
 
-@pytest.mark.parametrize("page", [README, GETTING_STARTED], ids=["README", "getting-started"])
+# getting-started: 55 s cold in the default run (a spectrum, then the Python blocks), the slow set; README's (29 s) stays
+@pytest.mark.parametrize("page", [README, pytest.param(GETTING_STARTED, marks=pytest.mark.slow)], ids=["README", "getting-started"])
 def test_python_blocks_run(page, tmp_path):
     """Each page's Python blocks, in order, in one fresh interpreter (a later block may use an
     earlier one's file: getting-started loads the spectrum its first command wrote)."""
