@@ -87,7 +87,7 @@ def test_a_new_output_needs_only_its_schema_line_and_its_computation(tmp_path):
     shutil.copytree(ROOT / "jaxrock", pkg / "jaxrock", ignore=shutil.ignore_patterns("__pycache__"))
     outputs, bookkeeping = pkg / "jaxrock" / "outputs.py", pkg / "jaxrock" / "bookkeeping.py"
     schema = outputs.read_text()
-    end = schema.index(")\nOUTPUTS = ")
+    end = schema.index("\n)\n", schema.index("SUMMARY: tuple[Output, ...] = (")) + 1  # the tuple's closing parenthesis
     outputs.write_text(schema[:end] + NEW_OUTPUT + schema[end + 1:])
     code = bookkeeping.read_text()
     anchor = '            "t_uplift": record.t_uplift,\n'
