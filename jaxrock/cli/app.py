@@ -31,7 +31,6 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     rich_markup_mode=None,  # help texts are shown as written: units "[m]" and ranges "a:b:n" are not markup
-    help="Rocking bodies under earthquakes (Vassiliou, Mackie & Stojadinovic 2014), in JAX (float64).",
 )
 
 
@@ -46,7 +45,7 @@ def _print_version(value: bool):
 @app.callback()
 def _root(version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
                                        help="print jaxrock's version (from git tags: it names the commit) and exit")):
-    """Rocking bodies under earthquakes (Vassiliou, Mackie & Stojadinovic 2014), in JAX (float64)."""
+    """Rocking bodies under earthquakes (Vassiliou, Mackie & Stojadinovic 2014), in JAX (float64)."""  # the program's help
 
 
 def in_folder(out: Path, first_file: str, parts: str, kept: str, run):
