@@ -30,7 +30,7 @@ _runtime.install()  # float64 and the compilation cache, when JAX is imported
 # public name → the module that defines it (imported on first use)
 _EXPORTS = {
     **dict.fromkeys(["G", "Block", "pulse_of_ratios", "ratios_of_pulse"], "geometry"),
-    **dict.fromkeys(["AbstractExcitation", "RickerPulse", "AntisymmetricRickerPulse", "SinePulse", "Record", "StillGround"], "excitation"),
+    **dict.fromkeys(["AbstractExcitation", "RickerPulse", "AntisymmetricRickerPulse", "SinePulse", "Record", "StillGround", "WithVertical"], "excitation"),
     "JaxrockInputError": "_validate",
     **dict.fromkeys(["Save", "Solution", "Status", "status_names", "status_codes"], "results"),
     **dict.fromkeys(["SUMMARY", "Output"], "outputs"),
@@ -60,6 +60,7 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
     from .excitation import (
         AbstractExcitation as AbstractExcitation, RickerPulse as RickerPulse,
         AntisymmetricRickerPulse as AntisymmetricRickerPulse, Record as Record, SinePulse as SinePulse, StillGround as StillGround,
+        WithVertical as WithVertical,
     )
     from ._validate import JaxrockInputError as JaxrockInputError
     from .results import (

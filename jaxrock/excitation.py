@@ -22,6 +22,7 @@ import numpy as np
 from jaxtyping import Array, Float, Int
 
 from ._validate import JaxrockInputError, Limit, check_limits, check_range, is_concrete
+from .geometry import G
 
 _BISECTIONS = 64
 
@@ -117,6 +118,30 @@ class AbstractExcitation(eqx.Module):
         """
         return self.step_ts
 
+    def vertical_acceleration(self, t) -> Float[Array, ""]:
+        """The vertical ground acceleration üv(t) [m/s², upwards]: 0 for a horizontal excitation
+        (the default); `WithVertical` gives its vertical component.
+
+        Arguments:
+            t (float | Array): time [s].
+        """
+        return jnp.zeros_like(jnp.asarray(t, dtype=float))
+
+    def uplift_time(self, t, level) -> Float[Array, ""]:
+        """First time τ ≥ t at which a body at rest uplifts: |üg(τ)| > level·(1 + üv(τ)/g).
+
+        With `level` = g tanα′ it is the rigid block's uplift under both components,
+        |üg| > (g + üv) tanα′. Default (no vertical component): `next_exceedance`.
+
+        Arguments:
+            t (float | Array): time to search from [s].
+            level (float | Array): g tanα′ [m/s²], ≥ 0.
+
+        Returns:
+            (Array): the time τ [s], or +inf.
+        """
+        return self.next_exceedance(t, level)
+
     @abc.abstractmethod
     def next_exceedance(self, t, level) -> Float[Array, ""]:
         """First time τ ≥ t with |üg(τ)| > level (τ = t if it already exceeds); +inf if none.
@@ -134,16 +159,21 @@ class AbstractExcitation(eqx.Module):
 
 
 def _implicit_time(f, tau, level):
-    """Return τ unchanged in value, but with the gradient of the root of |f(τ)| = level.
+    """Return τ unchanged in value, but with the gradient of the root of |f(τ)| = level."""
+    return _implicit_root(lambda s: jnp.abs(f(s)) - level, tau)
+
+
+def _implicit_root(F, tau):
+    """Return τ unchanged in value, but with the gradient of the root of F(τ) = 0.
 
     τ comes from a bisection (no useful gradient); one Newton step with the root's residual,
-    whose value is ~0, carries the implicit-function derivative dτ = −d(|f| − level)/(d|f|/dt).
+    whose value is ~0, carries the implicit-function derivative dτ = −dF/(dF/dt).
     """
     tau0 = jax.lax.stop_gradient(tau)
-    val, slope = jax.jvp(lambda s: jnp.abs(f(s)), (tau0,), (jnp.ones_like(tau0),))
+    val, slope = jax.jvp(F, (tau0,), (jnp.ones_like(tau0),))
     slope = jax.lax.stop_gradient(slope)
     safe = jnp.where(jnp.abs(slope) > 0, slope, 1.0)
-    corrected = tau0 - (val - level) / safe
+    corrected = tau0 - val / safe
     # Keep the value exactly τ0; only the tangent of `corrected` is used.
     return tau0 + (corrected - jax.lax.stop_gradient(corrected))
 
@@ -630,3 +660,163 @@ class Record(AbstractExcitation):
         t_prev = jnp.maximum(ts[jnp.maximum(k - 1, 0)], t)
         tau = crossing(t_prev, ts[k], self(t_prev), self.scale * self.acc[k], level)
         return jnp.where(now, t, jnp.where(found, tau, jnp.inf))
+
+
+class WithVertical(AbstractExcitation):
+    """A horizontal excitation with a vertical component: üg(t) and üv(t) = vertical(t − delay).
+
+    The vertical acceleration (upwards positive) scales gravity: in the rigid model
+    θ̈ = −p′²[(1 + üv/g) sin(α′ sgnθ − θ) + (üg/g) cos(α′ sgnθ − θ)] and a body at rest uplifts
+    when |üg| > (g + üv) tanα′ (`uplift_time`); in the spring model it loads the column and the
+    spring axially. Both components are any excitations: pulses with their own amplitude,
+    frequency and phase (`delay`), or a record pair (the same sample step, no delay). The body
+    stays on the ground only while g + üv > 0: the vertical peak must be below g.
+
+    Attributes:
+        horizontal: the horizontal component üg(t).
+        vertical: the vertical component, before its delay.
+        delay: the vertical component's time shift [s] (its phase against the horizontal one);
+            default 0; finite; 0 for a record pair.
+
+    Raises:
+        JaxrockInputError: when a component is not an excitation or is itself a `WithVertical`; the
+            vertical peak (concrete) is not below g; a record pair has two sample steps or a delay.
+
+    Example:
+        ```python
+        horizontal = jaxrock.RickerPulse(a_p=3.0, omega_p=4.0)
+        vertical = jaxrock.RickerPulse(a_p=2.0, omega_p=10.0)  # |üv| ≤ 2 m/s² < g
+        ground = jaxrock.WithVertical(horizontal, vertical, delay=0.1)
+        ```
+    """
+
+    horizontal: AbstractExcitation
+    vertical: AbstractExcitation
+    delay: Float[Array, ""] = eqx.field(converter=_as_float, default=0.0)
+
+    def __check_init__(self):
+        for name, part in (("horizontal", self.horizontal), ("vertical", self.vertical)):
+            if not isinstance(part, AbstractExcitation) or isinstance(part, WithVertical):
+                raise JaxrockInputError(f"WithVertical {name} component must be a one-component jaxrock excitation "
+                                        f"(a pulse, a Record), got {type(part).__name__}")
+        check_range("delay (vertical component's time shift) [s]", self.delay, -math.inf, math.inf)
+        if isinstance(self.horizontal, Record) and isinstance(self.vertical, Record) and is_concrete(
+                (self.horizontal.dt, self.vertical.dt, self.delay)):
+            if not np.allclose(np.asarray(self.horizontal.dt), np.asarray(self.vertical.dt), rtol=1e-12, atol=0):
+                raise JaxrockInputError(f"record pair: horizontal dt = {float(self.horizontal.dt):g} s, vertical dt = "
+                                        f"{float(self.vertical.dt):g} s; valid: one sample step (resample one of them)")
+            if np.any(np.asarray(self.delay) != 0):
+                raise JaxrockInputError(f"record pair: delay = {float(self.delay):g} s; valid: 0 (a pair is recorded together)")
+        check_limits(self.limits()[-1:])
+
+    @property
+    def _pair(self) -> bool:
+        """Both components sampled records (static): then both are linear on the same intervals."""
+        return isinstance(self.horizontal, Record) and isinstance(self.vertical, Record)
+
+    def _vertical_peak(self):
+        peak = self.vertical.peak
+        return jnp.zeros(()) if peak is None else peak
+
+    def limits(self) -> tuple[Limit, ...]:
+        return (*self.horizontal.limits(), *self.vertical.limits(),
+                Limit("delay (vertical component's time shift) [s]", self.delay),
+                Limit("peak |uv| (vertical acceleration) [m/s^2]", self._vertical_peak(), 0.0, G, hi_open=True))
+
+    def __call__(self, t):
+        return self.horizontal(t)
+
+    def vertical_acceleration(self, t):
+        return self.vertical(jnp.asarray(t, dtype=float) - self.delay)
+
+    def scaled(self, factor) -> "WithVertical":
+        """Both components at `factor` × their accelerations.
+
+        Arguments:
+            factor (float | Array): the factor [–].
+        """
+        return WithVertical(self.horizontal.scaled(factor), self.vertical.scaled(factor), self.delay)
+
+    @property
+    def t_start(self):
+        return jnp.minimum(self.horizontal.t_start, self.vertical.t_start + self.delay)
+
+    @property
+    def t_end(self):
+        return jnp.maximum(self.horizontal.t_end, self.vertical.t_end + self.delay)
+
+    @property
+    def max_step(self):
+        return jnp.minimum(self.horizontal.max_step, self.vertical.max_step)
+
+    @property
+    def peak(self):
+        return self.horizontal.peak
+
+    @property
+    def step_ts(self):
+        # a record pair shares its samples (one dt, no delay: checked at construction)
+        return self.horizontal.step_ts if self.horizontal.step_ts is not None else self.vertical.step_ts
+
+    def step_ts_from(self, t, m: int):
+        part = self.horizontal if self.horizontal.step_ts is not None else self.vertical
+        return part.step_ts_from(t, m)
+
+    def next_exceedance(self, t, level):
+        """First time τ ≥ t with |üg(τ)| > level: the horizontal component's."""
+        return self.horizontal.next_exceedance(t, level)
+
+    def _excess(self, level):
+        """F(τ) = |üg(τ)| − level·(1 + üv(τ)/g): the body at rest uplifts where F > 0."""
+        return lambda s: jnp.abs(self.horizontal(s)) - level * (1 + self.vertical_acceleration(s) / G)
+
+    def uplift_time(self, t, level):
+        """First τ ≥ t with |üg(τ)| > level·(1 + üv(τ)/g) (`AbstractExcitation.uplift_time`).
+
+        A record pair: exact (F = |üg| − level(1 + üv/g) is convex on each sample interval, so
+        it exceeds 0 there only if it does at an end, and crosses 0 once, where üg has the sign it
+        has at that end: one linear root). Otherwise the first of `UPLIFT_GRID` equal intervals
+        from t to the window's end on which F exceeds 0 at an end, bisected: an exceedance shorter
+        than one interval (a 4096th of the window) can be missed.
+
+        Arguments:
+            t (float | Array): time to search from [s].
+            level (float | Array): g tanα′ [m/s²], ≥ 0.
+
+        Returns:
+            (Array): the time τ [s], or +inf.
+        """
+        t = jnp.asarray(t, dtype=float)
+        F = self._excess(level)
+        if self._pair:
+            h, v = self.horizontal, self.vertical
+            ts = h.times
+            inside = jnp.arange(h.n) < jnp.minimum(h.length, v.length)
+            Fk = jnp.abs(h.scale * h.acc) - level * (1 + v.scale * v.acc / G)
+            hit = (ts > t) & (Fk > 0) & inside
+            k = jnp.argmax(hit)
+            t_prev = jnp.maximum(ts[jnp.maximum(k - 1, 0)], t)
+            s = jnp.where(h.acc[k] >= 0, 1.0, -1.0)
+            L0 = s * h(t_prev) - level * (1 + v(t_prev) / G)
+            L1 = Fk[k]
+            frac = jnp.clip(-L0 / jnp.where(L1 - L0 > 0, L1 - L0, 1.0), 0.0, 1.0)
+            tau = jnp.where(L1 - L0 > 0, t_prev + frac * (ts[k] - t_prev), ts[k])
+            return jnp.where(F(t) > 0, t, jnp.where(jnp.any(hit), tau, jnp.inf))
+        t_end = jnp.maximum(self.t_end, t)
+        grid = t + (t_end - t) * jnp.linspace(0.0, 1.0, UPLIFT_GRID + 1)
+        above = jax.vmap(F)(grid) > 0
+        k = jnp.argmax(above)
+        found = jnp.any(above)
+
+        def bisect(_, ab):
+            a, b = ab
+            m = 0.5 * (a + b)
+            up = F(m) > 0
+            return jnp.where(up, a, m), jnp.where(up, m, b)
+
+        _, b = jax.lax.fori_loop(0, _BISECTIONS, bisect, (grid[jnp.maximum(k - 1, 0)], grid[k]))
+        tau = jnp.where(k == 0, t, _implicit_root(F, b))
+        return jnp.where(found, tau, jnp.inf)
+
+
+UPLIFT_GRID = 4096  # intervals of `WithVertical.uplift_time`'s search on a window (pulses)

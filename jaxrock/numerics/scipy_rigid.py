@@ -143,14 +143,23 @@ def _bisect_up(g, a, b, tol):
     return b
 
 
-def next_exceedance(ug, t, t_stop, level, scan_dt):
-    """First time τ ∈ [t, t_stop] with |ug(τ)| > level (a time where it does exceed), or None."""
-    g = lambda s: abs(float(ug(s))) - level
+def _excess(ug, level, uv=None):
+    """F(t) = |üg(t)| − level (1 + üv(t)/g), vectorised: a body at rest uplifts where F > 0."""
+    if uv is None:
+        return lambda s: np.abs(np.asarray(ug(s), dtype=float)) - level
+    return lambda s: np.abs(np.asarray(ug(s), dtype=float)) - level * (1 + np.asarray(uv(s), dtype=float) / G)
+
+
+def next_exceedance(ug, t, t_stop, level, scan_dt, uv=None):
+    """First time τ ∈ [t, t_stop] with |ug(τ)| > level (1 + uv(τ)/g) (a time where it does
+    exceed), or None; `uv` (vertical acceleration) None: 0."""
+    F = _excess(ug, level, uv)
+    g = lambda s: float(F(s))
     if g(t) > 0:
         return t
     n = max(int(math.ceil((t_stop - t) / scan_dt)), 1)
     grid = np.linspace(t, t_stop, n + 1)
-    vals = np.abs(np.asarray(ug(grid), dtype=float)) - level
+    vals = F(grid)
     tol = 1e-15 * max(1.0, abs(t), abs(t_stop))
     pos = np.flatnonzero(vals > 0)
     first = pos[0] if pos.size else vals.size
@@ -184,6 +193,7 @@ def solve(
     dense=None,
     max_step=np.inf,
     max_events=200_000,
+    vertical_fn=None,
 ) -> Result:
     """Integrate the rigid rocking block from rest at `t_start` (see module docstring).
 
@@ -194,6 +204,8 @@ def solve(
     - `t_final`: integrate to this time (history runs) instead of stopping when the answer is fixed.
     - `tstops`: times the integration must step on (record samples); `scan_dt`: grid of the
       uplift scan (default: `tstops` spacing, else (t_end − t_start)/4000).
+    - `vertical_fn(t)`: üv [m/s², upwards], vectorised, or None (none): it scales gravity,
+      θ̈ = −p′²[(1 + üv/g) sin(sα′ − θ) + (üg/g) cos(sα′ − θ)], uplift at |üg| > (g + üv) tanα′.
     """
     alpha, p, eta_block = _geometry(block)
     eta = eta_block if eta is None else float(eta)
@@ -212,11 +224,14 @@ def solve(
     if scan_dt is None:
         scan_dt = (t_end - t_start) / 4000
     p2 = p * p
+    uv = vertical_fn
+    gv = (lambda t: 1.0) if uv is None else (lambda t: 1.0 + float(uv(t)) / G)
+    lifts = lambda t: float(_excess(ug, level, uv)(t)) > 0
     v_zeno = zeno_v * p * alpha
 
     def rhs(t, y, s):
         phi = s * alpha - y[0]
-        return [y[1], -p2 * (math.sin(phi) + float(ug(t)) / G * math.cos(phi))]
+        return [y[1], -p2 * (gv(t) * math.sin(phi) + float(ug(t)) / G * math.cos(phi))]
 
     def ev_impact(t, y, s):
         return s * y[0]
@@ -244,7 +259,7 @@ def solve(
 
     for _ in range(max_events):
         if resting:
-            t_up = next_exceedance(ug, t, t_stop, level, scan_dt) if t < t_stop else None
+            t_up = next_exceedance(ug, t, t_stop, level, scan_dt, uv) if t < t_stop else None
             if t_up is None:
                 segments.append((t, t_stop, None))
                 break
@@ -297,7 +312,7 @@ def solve(
         if t_imp.size:
             if float(t_imp[0]) <= t:
                 # the block cannot leave θ = 0 on this side: decide as from rest
-                if abs(float(ug(t))) > level:
+                if lifts(t):
                     side, omega, theta = -math.copysign(1.0, float(ug(t))), 0.0, 0.0
                 else:
                     resting, theta, omega = True, 0.0, 0.0
@@ -309,7 +324,7 @@ def solve(
             theta, side = 0.0, -side
             if abs(post) < v_zeno:
                 omega = 0.0
-                if abs(float(ug(t))) > level:
+                if lifts(t):
                     side = -math.copysign(1.0, float(ug(t)))
                 else:
                     resting = True

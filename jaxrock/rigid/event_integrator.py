@@ -2,8 +2,9 @@
 sequence of segments, run by a bounded loop (static bound, reported as `Status.max_iterations` if
 hit):
 
-- **rest** — the block stays at θ = 0 while |üg| < g tanα′; the uplift time is found exactly
-  by `excitation.next_exceedance` and the block uplifts on side s = −sign(üg) (SPEC);
+- **rest** — the block stays at θ = 0 while |üg| < (g + üv) tanα′ (üv = 0 without a vertical
+  component); the uplift time is found by `excitation.uplift_time` (exact on pulses and records)
+  and the block uplifts on side s = −sign(üg) (SPEC);
 - **rocking** — eq. 2 (eq. 22 for an extended base) about the corner on side s, integrated by a
   diffrax solver until one of three `diffrax.Event`s, each located by a Newton root find on the
   dense output:
@@ -13,7 +14,7 @@ hit):
 
 Zeno sequences: after an impact with |üg| < g tanα′, the remaining flights form a geometric
 series (velocity ×η per impact, frozen üg, small angles) whose total duration is
-`T_Z = 2v/(1−η²) (1/A_s + η/A_−s)`, `A_s = p² cosα (tanα + s üg/g)`. When `T_Z ≤ zeno_time/p`,
+`T_Z = 2v/(1−η²) (1/A_s + η/A_−s)`, `A_s = p² cosα ((1 + üv/g) tanα + s üg/g)`. When `T_Z ≤ zeno_time/p`,
 or when the post-impact velocity is below `zeno_velocity·p·α` (a floor for slender blocks, η → 1,
 whose flights near the uplift threshold are long even at round-off velocities), the block is put
 to rest (its rest is memoryless: the next uplift only depends on the excitation, searched from the
@@ -329,7 +330,7 @@ class RigidStepper(AbstractStepper):
 
     def _rest_step(self, sc: _Scene, exc: AbstractExcitation, c: _Carry) -> _Carry:
         save, t_stop = self.save, sc.t_stop
-        t_up = exc.next_exceedance(c.t, sc.level)
+        t_up = exc.uplift_time(c.t, sc.level)
         starts = t_up < t_stop
         t_new = jnp.where(starts, t_up, c.t)
         side = -jnp.sign(exc(t_new))
@@ -587,9 +588,9 @@ class RigidStepper(AbstractStepper):
         alpha, p, eta, integ = sc.alpha, sc.p, sc.eta, self.integrator
         theta_dot_impact = eta * theta_dot_f
         side_imp = -side
-        s_ug = side_imp * exc(tf) / G
-        a_s = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) + s_ug)
-        a_o = p**2 * jnp.cos(alpha) * (jnp.tan(alpha) - s_ug)
+        s_ug, gv = side_imp * exc(tf) / G, 1 + exc.vertical_acceleration(tf) / G
+        a_s = p**2 * jnp.cos(alpha) * (gv * jnp.tan(alpha) + s_ug)
+        a_o = p**2 * jnp.cos(alpha) * (gv * jnp.tan(alpha) - s_ug)
         v = jnp.abs(theta_dot_impact)
         both = (a_s > 0) & (a_o > 0)
         t_zeno = 2 * v / (1 - eta**2 + sc.tiny) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
@@ -641,6 +642,9 @@ class _Piece(eqx.Module):
 
     def __call__(self, t):
         return self.a0 + (t - self.t0) * self.slope
+
+    def vertical_acceleration(self, t):
+        return jnp.zeros_like(t)  # a paced run's record has no vertical component (`RigidStepper._paced`)
 
 
 def _interval(exc: SampledRecord, t):

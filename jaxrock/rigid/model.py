@@ -72,7 +72,8 @@ class RigidModel(AbstractModel):
         return EventIntegrator(autodiff=autodiff or "reverse")
 
     def acceleration(self, t, theta, side, excitation: AbstractExcitation):
-        """θ̈ about the corner on `side`, eq. 2 / eq. 22 [rad/s²].
+        """θ̈ about the corner on `side`, eq. 2 / eq. 22 [rad/s²]; a vertical ground acceleration üv
+        scales gravity: θ̈ = −p′²[(1 + üv/g) sin(α′ sgnθ − θ) + (üg/g) cos(α′ sgnθ − θ)].
 
         Arguments:
             t (float | Array): time [s].
@@ -82,7 +83,7 @@ class RigidModel(AbstractModel):
         """
         a, p = self.block.alpha_r, self.block.p_r
         phi = side * a - theta
-        return -(p**2) * (jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
+        return -(p**2) * ((1 + excitation.vertical_acceleration(t) / G) * jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
 
     def _free(self, theta, theta_dot, side):
         """(overturns, next peak |θ| [rad]) of free rocking from (θ, θ̇) on `side` (`jaxrock.rigid.event_integrator`)."""

@@ -1,0 +1,221 @@
+"""Vertical ground motion (`jaxrock.WithVertical`): closed forms of the rigid model (a constant
+vertical acceleration is a change of g; uplift at |üg| > (g + üv) tanα), the exact uplift time of
+pulses and record pairs against root finds written here, the RM against the SciPy reference with
+the same vertical motion, gradients against central differences, and the one-line refusals."""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import jaxrock as jr
+from jaxrock.numerics import scipy_rigid
+
+G = 9.81  # m/s², SPEC
+
+
+class Steady(jr.AbstractExcitation):
+    """A constant acceleration `value` on [t0, t1], zero outside (a test's vertical component)."""
+
+    value: jax.Array
+    t0: float = eqx.field(static=True)
+    t1: float = eqx.field(static=True)
+
+    def __call__(self, t):
+        t = jnp.asarray(t, dtype=float)
+        return jnp.where((t >= self.t0) & (t <= self.t1), self.value, 0.0)
+
+    @property
+    def t_start(self):
+        return jnp.asarray(self.t0)
+
+    @property
+    def t_end(self):
+        return jnp.asarray(self.t1)
+
+    @property
+    def max_step(self):
+        return jnp.asarray(jnp.inf)
+
+    @property
+    def peak(self):
+        return jnp.abs(self.value)
+
+    @property
+    def step_ts(self):
+        return None
+
+    def scaled(self, factor):
+        return Steady(self.value * factor, self.t0, self.t1)
+
+    def next_exceedance(self, t, level):
+        raise NotImplementedError  # a vertical component is never searched on its own
+
+
+def _history(model, excitation, ts):
+    sol = jr.simulate(model, excitation, save=jr.Save(jnp.asarray(ts), ("theta",)))
+    assert sol.status == jr.Status.ok
+    return np.asarray(sol.history["theta"]), sol
+
+
+@pytest.mark.parametrize("c", [-3.0, 2.5])
+def test_constant_vertical_is_a_change_of_g(c):
+    """θ̈ = −p²[(1 + c/g) sin φ + (üg/g) cos φ] is the equation of a block of size R/(1 + c/g) under
+    üg·g/(g + c): the same θ(t), impacts and uplift (|üg| > (g + c) tanα ⟺ |üg g/(g + c)| > g tanα)."""
+    block = jr.Block.from_slenderness(6.0, 0.15)
+    a_p, omega_p = jr.pulse_of_ratios(block, 1.6, 3.0)
+    pulse = jr.RickerPulse(a_p, omega_p)
+    t0, t1 = float(pulse.t_start), float(pulse.t_end) + 30.0
+    ts = np.linspace(t0, t1 - 1.0, 801)
+    theta_v, sol_v = _history(jr.RigidModel(block), jr.WithVertical(pulse, Steady(jnp.asarray(c), t0, t1)), ts)
+    k = 1 + c / G
+    twin = jr.Block.from_size(6.0 / k, 6.0 * 0.15 / k)  # the same α, p² × (1 + c/g)
+    theta_g, sol_g = _history(jr.RigidModel(twin, eta=block.eta), jr.RickerPulse(a_p / k, omega_p), ts)
+    assert 0.05 < float(sol_v.max_theta) < 1 and int(sol_v.n_impacts) >= 2  # a rocking scene, not a quiet one
+    assert np.max(np.abs(theta_v - theta_g)) / float(block.alpha) < 1e-6
+    assert float(sol_v.t_uplift) == pytest.approx(float(sol_g.t_uplift), abs=1e-9)
+
+
+@pytest.mark.parametrize("c", [-4.0, 0.0, 4.0])
+def test_uplift_threshold_with_vertical(c):
+    """A body at rest uplifts exactly when max |üg| > (g + üv) tanα (SPEC, with üv)."""
+    block = jr.Block.from_slenderness(4.0, 0.25)
+    level = (G + c) * 0.25
+    for factor, lifts in ((1 - 1e-6, False), (1 + 1e-6, True)):
+        pulse = jr.RickerPulse(factor * level, 5.0)
+        steady = Steady(jnp.asarray(c), float(pulse.t_start), float(pulse.t_end))
+        sol = jr.simulate(jr.RigidModel(block), jr.WithVertical(pulse, steady))
+        assert bool(sol.uplifted) is lifts, (c, factor)
+        assert (float(sol.max_theta) > 0) is lifts
+
+
+def _first_root(F, t0, t1, n=200_001):
+    """The first t in [t0, t1] with F(t) > 0, by a dense scan and brentq (independent of jaxrock)."""
+    grid = np.linspace(t0, t1, n)
+    vals = F(grid)
+    i = int(np.argmax(vals > 0))
+    assert vals[i] > 0
+    return brentq(F, grid[i - 1], grid[i], xtol=1e-14) if i else grid[0]
+
+
+def test_uplift_time_of_a_vertical_pulse():
+    """`WithVertical.uplift_time` on two pulses: the first root of |üg| − (g + üv) tanα."""
+    tan_a = 0.2
+    for a_v, delay in ((-5.0, 0.0), (5.0, 0.15), (8.0, -0.3)):
+        ex = jr.WithVertical(jr.RickerPulse(2.6, 4.0), jr.SinePulse(a_v, 9.0, 1.5), delay)
+        ug = lambda t: 2.6 * (1 - (4.0 * t) ** 2 / 2) * np.exp(-((4.0 * t) ** 2) / 4)
+        uv = lambda t: np.where((t - delay >= 0) & (t - delay <= 3 * np.pi / 9.0), a_v * np.sin(9.0 * (t - delay)), 0.0)
+        F = lambda t: np.abs(ug(t)) - G * tan_a * (1 + uv(t) / G)
+        t0 = float(ex.t_start)
+        expected = _first_root(F, t0, float(ex.t_end))
+        got = float(ex.uplift_time(t0, G * tan_a))
+        assert got == pytest.approx(expected, abs=1e-9), (a_v, delay)
+
+
+def test_uplift_time_of_a_record_pair_is_exact():
+    """A record pair is linear on each sample interval: the uplift time is the linear root."""
+    rng = np.random.default_rng(7)
+    dt, n = 0.01, 600
+    h, v = rng.normal(0, 1.5, n), rng.normal(0, 2.0, n)
+    ex = jr.WithVertical(jr.Record(h, dt), jr.Record(v, dt))
+    ts = dt * np.arange(n)
+    F = lambda t: np.abs(np.interp(t, ts, h)) - G * 0.4 * (1 + np.interp(t, ts, v) / G)
+    for t_from in (0.0, 0.731, 2.0):
+        expected = _first_root(F, t_from, ts[-1], n=600_001)
+        assert float(ex.uplift_time(t_from, G * 0.4)) == pytest.approx(expected, abs=1e-9)
+
+
+SCENES = [  # (2h [m], tanα, a_p/(g tanα), ω_p/p, a_v [m/s²], ω_v/ω_p, delay·ω_p)
+    (10.0, 0.2, 2.0, 3.0, 4.0, 2.0, 0.0),
+    (10.0, 0.2, 2.0, 3.0, -4.0, 2.0, 0.5),
+    (4.0, 0.15, 3.0, 5.0, 6.0, 1.0, -1.0),
+    (20.0, 0.1, 4.0, 6.0, 3.0, 3.0, 0.3),
+    (2.0, 0.3, 1.6, 2.0, 7.0, 0.5, 0.0),
+    (8.0, 0.25, 2.5, 4.0, -6.0, 2.5, 1.2),
+    (6.0, 0.12, 5.0, 8.0, 5.0, 1.5, -0.4),
+    (12.0, 0.18, 1.3, 1.5, 8.0, 4.0, 0.0),
+]
+
+
+def _scene(height, tan_a, ap_ratio, wp_ratio, a_v, wv_ratio, phase):
+    block = jr.Block.from_slenderness(height, tan_a)
+    a_p, omega_p = jr.pulse_of_ratios(block, ap_ratio, wp_ratio)
+    return block, jr.WithVertical(jr.RickerPulse(a_p, omega_p), jr.RickerPulse(a_v, wv_ratio * omega_p), phase / omega_p)
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_rigid_with_vertical_against_scipy(scene):
+    """The RM with a vertical pulse against the SciPy reference given the same üv (its own uplift
+    scan, its own events): max θ/α and the uplift time."""
+    block, ex = _scene(*scene)
+    sol = jr.simulate(jr.RigidModel(block), ex)
+    assert sol.status == jr.Status.ok
+    h, v = ex.horizontal, ex.vertical
+    ug = lambda t: np.asarray(h(jnp.asarray(t)))
+    uv = lambda t: np.asarray(v(jnp.asarray(t) - ex.delay))
+    f, _, _ = scipy_rigid.ricker(float(h.a_p), float(h.omega_p))
+    fv, _, _ = scipy_rigid.ricker(float(v.a_p), float(v.omega_p))
+    ref = scipy_rigid.solve(block, f, float(ex.t_start), float(ex.t_end), vertical_fn=lambda t: fv(np.asarray(t) - float(ex.delay)))
+    del ug, uv
+    assert bool(sol.overturned) == ref.overturned
+    assert float(sol.max_theta) == pytest.approx(ref.max_theta, abs=2e-6)
+    assert float(sol.t_uplift) == pytest.approx(ref.t_uplift, abs=1e-8)
+
+
+def test_vertical_changes_the_answer():
+    """The vertical component is not ignored: an upward üv at the horizontal peak stabilises, a
+    downward one destabilises (gravity's restoring moment grows and shrinks)."""
+    block = jr.Block.from_slenderness(10.0, 0.2)
+    a_p, omega_p = jr.pulse_of_ratios(block, 2.0, 3.0)
+    pulse = jr.RickerPulse(a_p, omega_p)
+    plain = float(jr.simulate(jr.RigidModel(block), pulse).max_theta)
+    up = float(jr.simulate(jr.RigidModel(block), jr.WithVertical(pulse, jr.RickerPulse(3.0, omega_p))).max_theta)
+    down = float(jr.simulate(jr.RigidModel(block), jr.WithVertical(pulse, jr.RickerPulse(-3.0, omega_p))).max_theta)
+    assert up < plain < down
+
+
+def test_gradients_through_vertical_match_central_differences():
+    """d max θ/α against the vertical amplitude a_v and the horizontal a_p, reverse mode, on the
+    8 scenes, against central differences of the same runs."""
+    checked = 0
+    for scene in SCENES:
+        block, ex = _scene(*scene)
+        model = jr.RigidModel(block)
+
+        def peak(x):
+            e = eqx.tree_at(lambda e: (e.horizontal.a_p, e.vertical.a_p), ex, (x[0], x[1]))
+            return jr.simulate(model, e).max_theta
+
+        x0 = jnp.asarray([ex.horizontal.a_p, ex.vertical.a_p])
+        sol = jr.simulate(model, ex)
+        if bool(sol.overturned):  # max θ/α is the threshold, flat: nothing to compare
+            continue
+        grad = np.asarray(jax.grad(peak)(x0))
+        assert np.all(np.isfinite(grad))
+        for i in range(2):
+            eps = 1e-5 * float(abs(x0[i]))
+            e = jnp.zeros(2).at[i].set(eps)
+            fd = (float(peak(x0 + e)) - float(peak(x0 - e))) / (2 * eps)
+            assert grad[i] == pytest.approx(fd, rel=2e-3, abs=1e-4 / float(abs(x0[i]))), (scene, i)
+        checked += 1
+    assert checked >= 6
+
+
+def test_vertical_refusals():
+    """One line each, naming the parameter and its range."""
+    pulse = jr.RickerPulse(3.0, 4.0)
+    with pytest.raises(jr.JaxrockInputError, match=r"peak \|uv\| \(vertical acceleration\).*9.81"):
+        jr.WithVertical(pulse, jr.RickerPulse(10.0, 4.0))
+    with pytest.raises(jr.JaxrockInputError, match="one sample step"):
+        jr.WithVertical(jr.Record(np.zeros(10), 0.01), jr.Record(np.zeros(10), 0.02))
+    with pytest.raises(jr.JaxrockInputError, match="delay"):
+        jr.WithVertical(jr.Record(np.zeros(10), 0.01), jr.Record(np.zeros(10), 0.01), delay=0.1)
+    with pytest.raises(jr.JaxrockInputError, match="one-component"):
+        jr.WithVertical(jr.WithVertical(pulse, pulse), pulse)
+    assert math.isinf(float(jr.WithVertical(pulse, jr.RickerPulse(1.0, 4.0)).uplift_time(0.0, 100.0)))
