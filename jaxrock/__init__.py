@@ -30,7 +30,7 @@ _runtime.install()  # float64 and the compilation cache, when JAX is imported
 # public name → the module that defines it (imported on first use)
 _EXPORTS = {
     **dict.fromkeys(["G", "Block", "pulse_of_ratios", "ratios_of_pulse"], "geometry"),
-    **dict.fromkeys(["AbstractExcitation", "RickerPulse", "AntisymmetricRickerPulse", "SinePulse", "Record", "StillGround", "WithVertical"], "excitation"),
+    **dict.fromkeys(["AbstractExcitation", "RickerPulse", "AntisymmetricRickerPulse", "SinePulse", "Record", "StillGround", "WithVertical", "ricker_with_vertical"], "excitation"),
     "JaxrockInputError": "_validate",
     **dict.fromkeys(["Save", "Solution", "Status", "status_names", "status_codes"], "results"),
     **dict.fromkeys(["SUMMARY", "Output"], "outputs"),
@@ -39,7 +39,7 @@ _EXPORTS = {
     **dict.fromkeys(["ModelKind", "Param", "register_model_kind", "register_pulse_kind", "DEFAULT_SMOOTHING", "DEFAULT_BACKBONE"], "scene"),
     **dict.fromkeys(["scene_of", "scene_model", "scene_pulse"], "construct"),
     **dict.fromkeys(["Sensitivity", "verdict_uncertain"], "sensitivity"),
-    **dict.fromkeys(["EventIntegrator", "RigidModel"], "rigid"),
+    **dict.fromkeys(["EventIntegrator", "RigidModel", "RockingFrame"], "rigid"),
     **dict.fromkeys(["SpringModel", "AbstractSpringModel", "QuasiRigidSpringModel", "FlexibleSpringModel", "SpringSystem", "Column",
                      "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear", "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
     **dict.fromkeys(["el_centro", "builtin_record", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
@@ -60,7 +60,7 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
     from .excitation import (
         AbstractExcitation as AbstractExcitation, RickerPulse as RickerPulse,
         AntisymmetricRickerPulse as AntisymmetricRickerPulse, Record as Record, SinePulse as SinePulse, StillGround as StillGround,
-        WithVertical as WithVertical,
+        WithVertical as WithVertical, ricker_with_vertical as ricker_with_vertical,
     )
     from ._validate import JaxrockInputError as JaxrockInputError
     from .results import (
@@ -77,7 +77,7 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
     )
     from .construct import scene_of as scene_of, scene_model as scene_model, scene_pulse as scene_pulse
     from .sensitivity import Sensitivity as Sensitivity, verdict_uncertain as verdict_uncertain
-    from .rigid import EventIntegrator as EventIntegrator, RigidModel as RigidModel
+    from .rigid import EventIntegrator as EventIntegrator, RigidModel as RigidModel, RockingFrame as RockingFrame
     from .spring import (
         SpringModel as SpringModel, AbstractSpringModel as AbstractSpringModel, QuasiRigidSpringModel as QuasiRigidSpringModel,
         FlexibleSpringModel as FlexibleSpringModel, SpringSystem as SpringSystem, Column as Column, SpringIntegrator as SpringIntegrator,

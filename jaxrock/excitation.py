@@ -118,6 +118,12 @@ class AbstractExcitation(eqx.Module):
         """
         return self.step_ts
 
+    @property
+    def sampled(self) -> bool:
+        """Whether üg is a sampled record's (static): the rigid model's tighter record tolerances
+        apply (`jaxrock.rigid.EventIntegrator.tolerances`). Default False."""
+        return False
+
     def vertical_acceleration(self, t) -> Float[Array, ""]:
         """The vertical ground acceleration üv(t) [m/s², upwards]: 0 for a horizontal excitation
         (the default); `WithVertical` gives its vertical component.
@@ -571,6 +577,10 @@ class Record(AbstractExcitation):
                 Limit("record scale", self.scale, 0.0, math.inf, hi_open=True))
 
     @property
+    def sampled(self) -> bool:
+        return True
+
+    @property
     def n(self) -> int:
         """Number of samples held (padding included)."""
         return self.acc.shape[-1]
@@ -710,6 +720,10 @@ class WithVertical(AbstractExcitation):
         check_limits(self.limits()[-1:])
 
     @property
+    def sampled(self) -> bool:
+        return self.horizontal.sampled or self.vertical.sampled
+
+    @property
     def _pair(self) -> bool:
         """Both components sampled records (static): then both are linear on the same intervals."""
         return isinstance(self.horizontal, Record) and isinstance(self.vertical, Record)
@@ -820,3 +834,26 @@ class WithVertical(AbstractExcitation):
 
 
 UPLIFT_GRID = 4096  # intervals of `WithVertical.uplift_time`'s search on a window (pulses)
+
+
+def ricker_with_vertical(a_p, omega_p, vertical_ratio=0.5, vertical_frequency=2.0, vertical_phase=0.0) -> WithVertical:
+    """A symmetric Ricker pulse with a vertical Ricker pulse: the pulse kind "vertical".
+
+    üg(t) = a_p f(ω_p t) and üv(t) = r a_p f(κ ω_p (t − φ/ω_p)) (f eq. 28): the vertical peak is r
+    times the horizontal one (the V/H ratio), its frequency κ times, its centre φ/ω_p later.
+
+    Arguments:
+        a_p (float | Array): the horizontal amplitude [m/s²], ≠ 0.
+        omega_p (float | Array): the horizontal frequency [rad/s], > 0.
+        vertical_ratio (float | Array): r = peak üv / a_p [–], in (0, 5]; upwards at its centre;
+            default 0.5. A cell whose r |a_p| ≥ g would lift the body off: its run reports
+            `Status.invalid_input`.
+        vertical_frequency (float | Array): κ = ω_v/ω_p [–], > 0; default 2.
+        vertical_phase (float | Array): φ = ω_p × the vertical centre's delay [rad], finite; default 0.
+
+    Returns:
+        (WithVertical): the pair.
+    """
+    a_p, omega_p = _as_float(a_p), _as_float(omega_p)
+    vertical = RickerPulse(jnp.abs(a_p) * vertical_ratio, omega_p * vertical_frequency)
+    return WithVertical(RickerPulse(a_p, omega_p), vertical, _as_float(vertical_phase) / omega_p)

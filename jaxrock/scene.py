@@ -165,6 +165,8 @@ CBAR = Param("cbar", "spring-model damper c̄ (0: undamped)", "–", 0.0, math.i
              long_name="spring-model damper cbar", neutral=0.05)
 E_COLUMN = Param("E", "Young's modulus of the column", "Pa", 0.0, math.inf, True, True, default=30e9, units="Pa", option="--youngs-modulus")
 RHO_COLUMN = Param("rho", "density of the column", "kg/m³", 0.0, math.inf, True, True, default=2500.0, units="kg m-3")
+MASS_RATIO = Param("mass_ratio", "rocking frame: cap beam mass over all the columns' mass, γ = m_b/(N m)", "–", 0.0, math.inf,
+                   hi_open=True, default=1.0, long_name="frame cap beam over columns mass ratio")
 ZETA_COLUMN = Param("zeta", "column damping ratio, first fixed-base mode", "–", 0.0, math.inf, hi_open=True, default=0.01,
                     long_name="column damping ratio")
 
@@ -253,6 +255,8 @@ register_model_kind("spring", "jaxrock.spring.model:quasi_rigid_scene", (CBAR, "
                     "quasi-rigid spring model (SM), added masses")
 register_model_kind("spring-flexible", "jaxrock.spring.model:flexible_scene", (CBAR, E_COLUMN, RHO_COLUMN, ZETA_COLUMN, "backbone", "smoothing"),
                     "spring model with an elastic column (concrete by default)")
+register_model_kind("frame", "jaxrock.rigid.frame:scenes_file_model", (MASS_RATIO, ETA),
+                    "rocking frame: rigid columns capped by a rigid beam (Makris & Vassiliou 2013)")
 DEFAULT_MODEL = "rigid"
 
 
@@ -351,6 +355,13 @@ N_CYCLES = Param("n_cycles", "cycles N of the sine pulse", "–", 0.5, 100.0, de
 register_pulse_kind("symmetric", "RickerPulse")
 register_pulse_kind("antisymmetric", "AntisymmetricRickerPulse")
 register_pulse_kind("sine", "SinePulse", (N_CYCLES,))
+VERTICAL_RATIO = Param("vertical_ratio", "vertical pulse: its peak over a_p (V/H), upwards; r·|a_p| < g", "–", 0.0, 5.0, lo_open=True,
+                       default=0.5, long_name="vertical over horizontal peak ratio")
+VERTICAL_FREQUENCY = Param("vertical_frequency", "vertical pulse: its frequency over ω_p", "–", 0.0, math.inf, True, True, default=2.0,
+                           long_name="vertical over horizontal pulse frequency")
+VERTICAL_PHASE = Param("vertical_phase", "vertical pulse: ω_p × its centre's delay", "rad", -math.inf, math.inf, True, True, default=0.0,
+                       long_name="vertical pulse phase", units="rad")
+register_pulse_kind("vertical", "ricker_with_vertical", (VERTICAL_RATIO, VERTICAL_FREQUENCY, VERTICAL_PHASE))
 DEFAULT_PULSE = "symmetric"
 
 

@@ -105,7 +105,7 @@ def test_every_command_has_help():
         ("spectrum", "full height 2h [m]"),
         ("simulate", "pulse amplitude [m/s²]"),
         ("simulate", "pulse frequency [rad/s]"),
-        ("batch", "[pulse: symmetric | antisymmetric | sine | elcentro | FILE]"),
+        ("batch", "[pulse: symmetric | antisymmetric | sine | vertical | elcentro | FILE]"),
         ("record-spectrum", "body heights 2h [m]: '1,2,5' or 'a:b:n'"),
         ("calibrate", "('0.1,0.2,0.3' or 'a:b:n'"),
     ],

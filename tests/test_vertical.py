@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
+from helpers import invoke
+
 import jaxrock as jr
 from jaxrock.numerics import scipy_rigid
 
@@ -157,12 +159,9 @@ def test_rigid_with_vertical_against_scipy(scene):
     sol = jr.simulate(jr.RigidModel(block), ex)
     assert sol.status == jr.Status.ok
     h, v = ex.horizontal, ex.vertical
-    ug = lambda t: np.asarray(h(jnp.asarray(t)))
-    uv = lambda t: np.asarray(v(jnp.asarray(t) - ex.delay))
     f, _, _ = scipy_rigid.ricker(float(h.a_p), float(h.omega_p))
     fv, _, _ = scipy_rigid.ricker(float(v.a_p), float(v.omega_p))
     ref = scipy_rigid.solve(block, f, float(ex.t_start), float(ex.t_end), vertical_fn=lambda t: fv(np.asarray(t) - float(ex.delay)))
-    del ug, uv
     assert bool(sol.overturned) == ref.overturned
     assert float(sol.max_theta) == pytest.approx(ref.max_theta, abs=2e-6)
     assert float(sol.t_uplift) == pytest.approx(ref.t_uplift, abs=1e-8)
@@ -219,3 +218,77 @@ def test_vertical_refusals():
     with pytest.raises(jr.JaxrockInputError, match="one-component"):
         jr.WithVertical(jr.WithVertical(pulse, pulse), pulse)
     assert math.isinf(float(jr.WithVertical(pulse, jr.RickerPulse(1.0, 4.0)).uplift_time(0.0, 100.0)))
+
+
+# -- the spring model: the same vertical motion through its own pipeline -----------------------------
+FIG5 = [(0.1, 2.0), (0.2, 4.0), (0.3, -3.0)]  # (tanα, a_v [m/s²]) on figure 5's pulse, a vertical twice as fast
+
+
+@pytest.mark.parametrize("tan_a, a_v", FIG5)
+def test_quasi_rigid_spring_model_follows_the_rigid_model_with_vertical(tan_a, a_v):
+    """Two pipelines of one system (undamped, figure 5's scene): with a vertical pulse the quasi-rigid
+    SM stays within the RM tolerance of test_spring's figure 5/8 comparison, and the vertical
+    component moves both models the same way by about the same amount."""
+    block = jr.Block.from_slenderness(10.0, tan_a)
+    pulse = jr.RickerPulse(4 * G * tan_a, 2 * math.pi)
+    ex = jr.WithVertical(pulse, jr.RickerPulse(a_v, 4 * math.pi))
+    tol = 0.01 + 0.12 * tan_a
+    runs = {}
+    for name, model in (("rm", jr.RigidModel(block, eta=1.0)), ("sm", jr.SpringModel(block, cbar=0.0))):
+        runs[name] = [jr.simulate(model, e) for e in (pulse, ex)]
+        assert all(s.status == jr.Status.ok for s in runs[name])
+    (rm0, rmv), (sm0, smv) = ([float(s.max_theta) for s in runs[k]] for k in ("rm", "sm"))
+    assert abs(smv - rmv) < tol, (smv, rmv)
+    assert abs(rmv - rm0) > 0.02  # the vertical component matters on these scenes
+    assert np.sign(smv - sm0) == np.sign(rmv - rm0) and abs((smv - sm0) - (rmv - rm0)) < 0.2 * abs(rmv - rm0)
+
+
+def test_spring_model_energy_balance_with_vertical():
+    """kinetic + potential + dissipated = input with a vertical component: its share of the
+    weight's forces (column and spring) is a ground load whose work is counted as input."""
+    block = jr.Block.from_slenderness(10.0, 0.2)
+    ex = jr.WithVertical(jr.RickerPulse(4 * G * 0.2, 2 * math.pi), jr.RickerPulse(5.0, 3 * math.pi), 0.2)
+    ts = jnp.linspace(float(ex.t_start), float(ex.t_end) + 3.0, 400)
+    fields = ("kinetic", "potential", "dissipated", "input")
+    s = jr.simulate(jr.SpringModel(block), ex, save=jr.Save(ts, fields))
+    assert s.status == jr.Status.ok
+    H = {k: np.asarray(v) for k, v in s.history.items()}
+    scale = np.max(np.abs(H["input"]))
+    assert scale > 0
+    assert np.max(np.abs(H["kinetic"] + H["potential"] + H["dissipated"] - H["input"])) < 1e-4 * scale
+
+
+def test_flexible_column_follows_the_quasi_rigid_body_with_vertical():
+    """The third pipeline: a concrete column of 4 elements (its weight's nodal forces scaled by
+    1 + üv/g) against the one-DOF body under the same pair (0.6602 vs 0.6612 without üv, 0.6317 vs
+    0.6324 with it when written)."""
+    block = jr.Block.from_slenderness(10.0, 0.2)
+    pulse = jr.RickerPulse(4 * G * 0.2, 2 * math.pi)
+    ex = jr.WithVertical(pulse, jr.RickerPulse(4.0, 4 * math.pi))
+    flexible = jr.SpringModel(block, column=jr.Column(E=30e9))
+    (f0, fv), (q0, qv) = ([float(jr.simulate(m, e).max_theta) for e in (pulse, ex)] for m in (flexible, jr.SpringModel(block)))
+    assert abs(fv - qv) < 5e-3 and abs(f0 - q0) < 5e-3
+    assert fv < f0 - 0.02 and abs((fv - f0) - (qv - q0)) < 0.1 * abs(qv - q0)
+
+
+# -- the pulse kind "vertical": spectra, the command line -----------------------------------------------
+def test_vertical_spectrum_uplift_line_is_the_closed_form():
+    """With the vertical peak at the horizontal one (φ = 0; r κ² tanα < 1, so t = 0 is where
+    |üg| − (g + üv) tanα peaks) uplift needs a_p > (g + r a_p) tanα: a_p/(g tanα) > 1/(1 − r tanα),
+    at every ω_p/p. The spectrum's refined uplift line against it."""
+    block = jr.Block.from_slenderness(10.0, 0.2)
+    r = 0.3
+    spec = jr.overturning_spectrum(jr.RigidModel(block), np.array([2.0, 5.0]), np.array([0.9, 1.2, 2.0]), pulse="vertical",
+                                   pulse_params={"vertical_ratio": r, "vertical_frequency": 2.0}, refine=30, progress=False)
+    np.testing.assert_allclose(np.asarray(spec.uplift_line), 1 / (1 - r * 0.2), rtol=1e-8)
+
+
+def test_cli_spectrum_with_a_vertical_pulse(tmp_path):
+    """`jaxrock spectrum --pulse vertical ...` runs and says so; a V/H ratio out of range is one line, exit 2."""
+    out = tmp_path / "v"
+    r = invoke("spectrum", "--pulse", "vertical", "--vertical-ratio", "0.3", "--vertical-frequency", "2", "--omega-ratio", "2,6",
+               "--accel-ratio", "1.5,3", "--out", out)
+    assert r.exit_code == 0, r.output
+    assert "vertical pulse" in r.output and (tmp_path / "v.nc").exists()
+    r = invoke("spectrum", "--pulse", "vertical", "--vertical-ratio", "7", "--out", out)
+    assert r.exit_code == 2 and "vertical-ratio" in r.output.replace("_", "-")

@@ -134,7 +134,7 @@ class EventIntegrator(AbstractIntegrator):
     def tolerances(self, exc: AbstractExcitation) -> tuple[float, float]:
         """The step-size tolerances on `exc`.
 
-        The fields where given, else `RECORD_TOLERANCES` on a sampled record and `PULSE_TOLERANCES`
+        The fields where given, else `RECORD_TOLERANCES` on a sampled record (or a pair) and `PULSE_TOLERANCES`
         on anything else; atol = rtol/100 where only rtol is given.
 
         Arguments:
@@ -144,7 +144,7 @@ class EventIntegrator(AbstractIntegrator):
             rtol (float): the relative tolerance.
             atol (float): the absolute tolerance.
         """
-        rtol0, atol0 = RECORD_TOLERANCES if isinstance(exc, SampledRecord) else PULSE_TOLERANCES
+        rtol0, atol0 = RECORD_TOLERANCES if exc.sampled else PULSE_TOLERANCES
         rtol = rtol0 if self.rtol is None else self.rtol
         atol = (atol0 if self.rtol is None else 1e-2 * rtol) if self.atol is None else self.atol
         return rtol, atol

@@ -124,6 +124,10 @@ class AbstractSpringSystem(eqx.Module):
         deformation damping at ground acceleration `ug`."""
 
     @abc.abstractmethod
+    def _gravity_force(self, q):
+        """−∇ of the column's gravity potential alone: the generalised weight [N, N·m]."""
+
+    @abc.abstractmethod
     def mass_matrix(self):
         """M (N × N)."""
 
@@ -222,8 +226,16 @@ class AbstractSpringSystem(eqx.Module):
 
     # -- forces -----------------------------------------------------------------------------------
     def forces(self, t, q, v, excitation):
-        """(f_total, f_ext, f_damp, f_nospring): generalised forces [N, N·m]."""
+        """(f_total, f_ext, f_damp, f_nospring): generalised forces [N, N·m].
+
+        A vertical ground acceleration üv scales gravity by 1 + üv/g: the weight's forces on the
+        column (`_gravity_force`) and the spring's moment, which the weight holds (My = m g b′); that
+        share is a ground load, in f_ext (so the input work balances the energy)."""
         f_ext, f_col, f_dcol = self._column_terms(q, v, excitation(t))
+        uv = excitation.vertical_acceleration(t) / G
+        f_ext = f_ext + uv * self._gravity_force(q)
+        if not self.fixed_base:
+            f_ext = f_ext.at[0].add(-uv * self.spring_moment(q[0]))
         f_nospring = f_ext + f_col - f_dcol
         if self.fixed_base:
             f_sp = jnp.zeros_like(q)
@@ -233,10 +245,10 @@ class AbstractSpringSystem(eqx.Module):
         return f_nospring - f_sp, f_ext, f_damp, f_nospring
 
     def base_moment(self, t, q, v, excitation):
-        """Spring + damper moment M(θ) + c θ̇ [N·m]; for a fixed base the reaction moment."""
+        """Spring + damper moment (1 + üv/g) M(θ) + c θ̇ [N·m]; for a fixed base the reaction moment."""
         if self.fixed_base:
             return self.forces(t, q, v, excitation)[3][0]
-        return self.spring_moment(q[0]) + self.c * v[0]
+        return (1 + excitation.vertical_acceleration(t) / G) * self.spring_moment(q[0]) + self.c * v[0]
 
     # -- second-order form (generalized-α) -------------------------------------------------------
     def forces_without_spring(self, t, q, v, excitation):
@@ -377,7 +389,10 @@ class QuasiRigidSystem(AbstractSpringSystem):
 
     def _column_terms(self, q, v, ug):
         f_ext = jnp.atleast_1d(-self.m * ug * self.h * jnp.cos(q[0]))  # eq. 10 right-hand side
-        return f_ext, -jax.grad(self._column_potential)(q), jnp.zeros_like(q)
+        return f_ext, self._gravity_force(q), jnp.zeros_like(q)
+
+    def _gravity_force(self, q):
+        return -jax.grad(self._column_potential)(q)  # the body's potential is its weight's
 
     def mass_matrix(self):
         return jnp.reshape(self.Itot, (1, 1))
@@ -476,6 +491,9 @@ class FlexibleSystem(AbstractSpringSystem):
     def _column_terms(self, q, v, ug):
         f_col, f_dcol = self._column_forces(q, v)
         return -ug * self.r, f_col, f_dcol
+
+    def _gravity_force(self, q):
+        return -jax.grad(beam.gravity_potential)(q, self.h, self.n, self.m)
 
     def mass_matrix(self):
         return self.M
