@@ -210,3 +210,18 @@ def test_cli_frame_spectrum(tmp_path):
     assert "frame model" in r.output and (tmp_path / "frame.nc").exists()
     r = invoke("spectrum", "--model", "frame", "--mass-ratio", "-1", "--out", out)
     assert r.exit_code == 2 and "mass" in r.output.lower()
+
+
+def test_reproduce_frame_section(tmp_path):
+    """`reproduce`'s extra section (no row of the paper's table): the spectra figure and the table
+    of least overturning a_p/(g tanα), which never falls as the beam gets heavier."""
+    from jaxrock.paper.beyond import frame_spectra
+
+    assert frame_spectra(tmp_path, n=6, refine=2) == []
+    assert (tmp_path / "frame_spectra.png").stat().st_size > 10_000
+    rows = [line.split("|")[2:-1] for line in (tmp_path / "frame_boundaries.md").read_text(encoding="utf-8").splitlines()
+            if line.startswith("| ") and line[2].isdigit()]
+    assert len(rows) == 6
+    for cells in rows:
+        least = [math.inf if c.strip() == "none" else float(c) for c in cells]
+        assert least == sorted(least), least

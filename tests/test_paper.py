@@ -25,7 +25,7 @@ import pytest
 from jaxrock.paper.findings import EXPLAINED, NOT_REPRODUCED, REPRODUCED, VERDICTS, Finding, value_finding
 from jaxrock.paper.kinematics import rm_corners
 from jaxrock.paper.reported import REPORTED
-from jaxrock.paper.reproduce import STEP_NAMES
+from jaxrock.paper.reproduce import PAPER_STEPS
 
 
 
@@ -89,7 +89,7 @@ def test_reproduce_refuses_bad_input_in_one_line(tmp_path):
 
 def test_every_reported_row_has_its_step_and_every_step_a_row():
     """The paper's table (`jaxrock.paper.reported`) and the steps of `reproduce` cover each other."""
-    assert {r.step for r in REPORTED} == set(STEP_NAMES)
+    assert {r.step for r in REPORTED} == set(PAPER_STEPS)
     figures = [f.strip() for r in REPORTED for f in r.figures.split(",")]
     assert len(figures) == len(set(figures))
     for fig in ("5", "6", "7", "8", "9", "10", "11", "12", "13", "15", "16", "17", "eq. 17", "eq. 21"):

@@ -20,14 +20,16 @@ def cell(x) -> str:
     return str(x)
 
 
-def write_table(path, rows: list[dict], *, footer: str | None = None) -> Path:
-    """Write `rows` (dicts with the same keys, in order) to the CSV file `path`, atomically."""
+def write_table(path, rows: list[dict], *, footer: str | None = None, columns: list[str] | None = None) -> Path:
+    """Write `rows` (dicts with the same keys, in order) to the CSV file `path`, atomically; `columns`
+    names them where there may be no row (default: the first row's keys)."""
 
-    header = ",".join(list(rows[0]))
+    fields = list(rows[0]) if columns is None else list(columns)
+    header = ",".join(fields)
 
     def write(tmp):
         with open(tmp, "w", newline="", encoding="utf-8") as fh:
-            w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
+            w = csv.DictWriter(fh, fieldnames=fields, lineterminator="\n")
             w.writeheader()
             w.writerows({k: cell(v) for k, v in r.items()} for r in rows)
             if footer is not None:

@@ -10,6 +10,7 @@ verdict table, then each figure inline) and `<out>/findings.csv`.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 import inspect
 import json
@@ -31,6 +32,7 @@ class Step:
     full: dict = field(default_factory=dict)
     quick: dict = field(default_factory=dict)
     files: tuple[str, ...] = ()  # the prefixes of its figures and tables in the output folder (default: its name)
+    extra: bool = False  # beyond the paper: a section of the report, no row of the paper's table (`REPORTED`)
 
 
 STEPS = (
@@ -54,8 +56,11 @@ STEPS = (
          {"n": 24, "heights": (10, 50, 100), "n_elements": 10}, {"n": 8, "heights": (10, 100), "n_elements": 4},
          files=("fig15", "fig16")),
     Step("fig17", "Figure 17: the Christchurch chimney", "chimney:fig17", {"n_elements": 10}, {"n_elements": 10, "quick": True}),
+    Step("frame", "Beyond the paper: rocking frame spectra (Makris & Vassiliou 2013)", "beyond:frame_spectra", {"n": 32},
+         {"n": 12, "refine": 4}, extra=True),
 )
 STEP_NAMES = tuple(s.name for s in STEPS)
+PAPER_STEPS = tuple(s.name for s in STEPS if not s.extra)  # those the paper's table (`REPORTED`) covers
 
 
 def _version() -> str:
@@ -148,7 +153,7 @@ def write_report(report: Report, out: Path) -> dict[str, Path]:
 
     out = Path(out)
     rows = [f.row() for fs in report.findings.values() for f in fs]
-    csv = write_table(out / "findings.csv", rows)
+    csv = write_table(out / "findings.csv", rows, columns=[f.name for f in dataclasses.fields(Finding)])
     counts = report.counts()
     total = sum(report.seconds.values())
     lines = [
@@ -169,7 +174,7 @@ def write_report(report: Report, out: Path) -> dict[str, Path]:
         step = by_name[name]
         lines += ["", f"## {step.title}", ""]
         lines += [f"The paper reports (figure {r.figures}; {r.scene}): {r.reported}." for r in REPORTED if r.step == name]
-        lines += ["", f"{report.seconds[name]:.1f} s; " + ", ".join(f"{f.verdict}: {f.quantity}" for f in fs) + "."]
+        lines += ["", f"{report.seconds[name]:.1f} s" + ("; " + ", ".join(f"{f.verdict}: {f.quantity}" for f in fs) if fs else "") + "."]
         for prefix in step.files or (name,):
             for extra in sorted(out.glob(f"{prefix}*.md")):
                 lines += ["", extra.read_text(encoding="utf-8").replace("# ", "### ", 1).strip()]
