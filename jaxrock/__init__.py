@@ -42,7 +42,7 @@ _EXPORTS = {
     **dict.fromkeys(["EventIntegrator", "RigidModel", "RockingFrame"], "rigid"),
     **dict.fromkeys(["SpringModel", "AbstractSpringModel", "QuasiRigidSpringModel", "FlexibleSpringModel", "SpringSystem", "Column",
                      "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear", "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
-    **dict.fromkeys(["el_centro", "builtin_record", "read_at2", "read_record", "read_records", "read_two_column"], "io.records"),
+    **dict.fromkeys(["el_centro", "builtin_record", "read_at2", "read_record", "read_record_pair", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",
     **dict.fromkeys(["record_measures", "suite_measures"], "intensity"),
     "fit_lognormal": "analyses.fragility",
@@ -86,7 +86,7 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
     )
     from .io.records import (
         el_centro as el_centro, builtin_record as builtin_record, read_at2 as read_at2, read_record as read_record,
-        read_records as read_records, read_two_column as read_two_column,
+        read_record_pair as read_record_pair, read_records as read_records, read_two_column as read_two_column,
     )
     from .io.scenes_file import read_scenes as read_scenes
     from .intensity import record_measures as record_measures, suite_measures as suite_measures

@@ -507,14 +507,20 @@ class StillGround(AbstractExcitation):
         return jnp.full_like(jnp.asarray(t, dtype=float), jnp.inf)
 
 
-def crossing(t0, t1, a0, a1, level):
-    """The first time in [t0, t1] at which |üg| exceeds `level` where üg is linear from a0 (at t0)
-    to a1 (at t1) (+inf if none): |üg| is largest at an end."""
+def crossing(t0, t1, a0, a1, level, v0=0.0, v1=0.0):
+    """The first time in [t0, t1] at which |üg| exceeds `level`·(1 + üv/g) where üg is linear from
+    a0 (at t0) to a1 (at t1) and üv from v0 to v1 (+inf if none).
+
+    F = |üg| − level (1 + üv/g) is convex on the piece: it exceeds 0 only if it does at an end, and
+    crosses 0 once, where üg has the sign it has at t1 (F > 0 needs |üg| > 0 all the way to t1):
+    the root of the linear s üg − level (1 + üv/g)."""
     s = jnp.where(a1 >= 0, 1.0, -1.0)
-    rise = s * a1 - s * a0
-    frac = jnp.clip((level - s * a0) / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
+    L0, L1 = s * a0 - level * (1 + v0 / G), s * a1 - level * (1 + v1 / G)
+    rise = L1 - L0
+    frac = jnp.clip(-L0 / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
     tau = jnp.where(rise > 0, t0 + frac * (t1 - t0), t1)
-    return jnp.where(jnp.abs(a0) > level, t0, jnp.where(jnp.abs(a1) > level, tau, jnp.inf))
+    F0, F1 = jnp.abs(a0) - level * (1 + v0 / G), jnp.abs(a1) - level * (1 + v1 / G)
+    return jnp.where(F0 > 0, t0, jnp.where(F1 > 0, tau, jnp.inf))
 
 
 class Record(AbstractExcitation):
@@ -534,10 +540,15 @@ class Record(AbstractExcitation):
         name: the record's name (static: part of what a compiled program is keyed by); default "record".
         length (int | Array | None): the number of samples that are the record, in [2, len(acc)] (an
             array leaf); default None: all of `acc`.
+        vertical (ArrayLike | None): the vertical component's samples [m/s², upwards] on the same
+            grid (as many as `acc`, finite; × `scale` as well, its peak then below g): a pair, whose
+            üv scales gravity (`WithVertical`); default None: horizontal only
+            (`jaxrock.read_record_pair` reads a pair from two files).
 
     Raises:
-        JaxrockInputError: when a concrete `acc` is not 1-D, has fewer than 2 samples or a non-finite
-            one, or `dt`, `scale` or `length` is outside its range.
+        JaxrockInputError: when a concrete `acc` (`vertical`) is not 1-D, has fewer than 2 samples or a
+            non-finite one, `vertical` has another length, or `dt`, `scale`, `length` or the vertical
+            peak is outside its range.
 
     Example:
         ```python
@@ -553,16 +564,23 @@ class Record(AbstractExcitation):
     scale: Float[Array, ""]
     length: Int[Array, ""]
     name: str = eqx.field(static=True, default="record")
+    vertical: Float[Array, " n"] | None = None
 
-    def __init__(self, acc, dt, scale=1.0, name: str = "record", length=None):
-        if is_concrete(acc):
-            a = np.asarray(acc, dtype=float)
+    def __init__(self, acc, dt, scale=1.0, name: str = "record", length=None, vertical=None):
+        for what, x in (("acc", acc), ("vertical", vertical)):
+            if x is None or not is_concrete(x):
+                continue
+            a = np.asarray(x, dtype=float)
             if a.ndim != 1 or a.size < 2:
-                raise JaxrockInputError(f"record acc must be a 1-D array of at least 2 samples, got shape {a.shape}")
+                raise JaxrockInputError(f"record {what} must be a 1-D array of at least 2 samples, got shape {a.shape}")
             if not np.all(np.isfinite(a)):
                 k = int(np.flatnonzero(~np.isfinite(a))[0])
-                raise JaxrockInputError(f"record acc has a non-finite value ({a[k]}) at sample {k}; all samples must be finite")
+                raise JaxrockInputError(f"record {what} has a non-finite value ({a[k]}) at sample {k}; all samples must be finite")
         self.acc = jnp.asarray(acc, dtype=float)
+        self.vertical = None if vertical is None else jnp.asarray(vertical, dtype=float)
+        if self.vertical is not None and self.vertical.shape != self.acc.shape:
+            raise JaxrockInputError(f"record vertical has {self.vertical.shape[-1]} samples, acc {self.acc.shape[-1]}; a pair has one "
+                                    "time grid (pad the shorter component with zeros: read_record_pair does)")
         self.dt = jnp.asarray(dt, dtype=float)
         self.scale = jnp.asarray(scale, dtype=float)
         self.length = jnp.asarray(self.acc.shape[-1] if length is None else length, dtype=jnp.int32)
@@ -572,9 +590,13 @@ class Record(AbstractExcitation):
         check_limits(self.limits()[1:])  # the samples were checked above, naming the first bad one
 
     def limits(self) -> tuple[Limit, ...]:
-        return (Limit("record acc (every sample) [m/s^2]", self.acc, ndim=1),
-                Limit("record dt [s]", self.dt, 0.0, math.inf, lo_open=True, hi_open=True),
-                Limit("record scale", self.scale, 0.0, math.inf, hi_open=True))
+        limits = (Limit("record acc (every sample) [m/s^2]", self.acc, ndim=1),
+                  Limit("record dt [s]", self.dt, 0.0, math.inf, lo_open=True, hi_open=True),
+                  Limit("record scale", self.scale, 0.0, math.inf, hi_open=True))
+        if self.vertical is None:
+            return limits
+        peak = jnp.abs(self.scale) * jnp.max(jnp.where(jnp.arange(self.n) < self.length, jnp.abs(self.vertical), 0.0))
+        return (*limits, Limit("peak |uv| (vertical acceleration: scale x the vertical record's peak) [m/s^2]", peak, 0.0, G, hi_open=True))
 
     @property
     def sampled(self) -> bool:
@@ -590,7 +612,7 @@ class Record(AbstractExcitation):
         """Sample times k·dt [s], k = 0 … n − 1."""
         return self.dt * jnp.arange(self.n)
 
-    def padded(self, n: int, name: str | None = None) -> "Record":
+    def padded(self, n: int, name: str | None = None, *, vertical: bool = False) -> "Record":
         """The same record with zeros appended up to `n` samples: the same motion, the same end.
 
         Records of a suite padded to one length and one name share a compiled program.
@@ -599,6 +621,8 @@ class Record(AbstractExcitation):
             n: the number of samples, ≥ `self.n`.
             name: the padded record's name (static, so part of what a compiled program is keyed by);
                 default None: the same name.
+            vertical: give a record without a vertical component a zero one, so that it shares the
+                structure (one compiled program) of pairs; default False.
 
         Returns:
             (Record): the padded record (its `length` unchanged).
@@ -608,7 +632,9 @@ class Record(AbstractExcitation):
         """
         if n < self.n:
             raise JaxrockInputError(f"record {self.name!r} has {self.n} samples; cannot pad it to {n}")
-        return Record(np.pad(np.asarray(self.acc), (0, n - self.n)), self.dt, self.scale, self.name if name is None else name, self.length)
+        pad = lambda x: None if x is None else np.pad(np.asarray(x), (0, n - self.n))
+        v = np.zeros(self.n) if vertical and self.vertical is None else self.vertical
+        return Record(pad(self.acc), self.dt, self.scale, self.name if name is None else name, self.length, pad(v))
 
     def scaled(self, factor) -> "Record":
         """The same record multiplied by `factor` (composes with the current scale).
@@ -618,14 +644,23 @@ class Record(AbstractExcitation):
         """
         return eqx.tree_at(lambda r: r.scale, self, self.scale * jnp.asarray(factor, dtype=float))
 
-    def __call__(self, t):
+    def _sampled(self, samples, t):
         x = t / self.dt
         k = jnp.clip(jnp.floor(x).astype(jnp.int32), 0, self.n - 2)
         w = x - k
-        val = (1 - w) * self.acc[k] + w * self.acc[k + 1]
+        val = (1 - w) * samples[k] + w * samples[k + 1]
         # compare times, not x: t_end / dt can round above n − 1 (e.g. n = 2000, dt = 0.02)
         inside = (t >= 0) & (t <= self.t_end)
         return jnp.where(inside, self.scale * val, 0.0)
+
+    def __call__(self, t):
+        return self._sampled(self.acc, t)
+
+    def vertical_acceleration(self, t):
+        """üv(t) [m/s²] of a pair (its `vertical` samples, linear between them, × `scale`); 0 without."""
+        if self.vertical is None:
+            return super().vertical_acceleration(t)
+        return self._sampled(self.vertical, t)
 
     @property
     def t_start(self):
@@ -658,17 +693,25 @@ class Record(AbstractExcitation):
         return jnp.where(i < self.length, self.dt * i, self.t_end)
 
     def next_exceedance(self, t, level):
+        return self._first(t, level, vertical=False)
+
+    def uplift_time(self, t, level):
+        """First τ ≥ t with |üg(τ)| > level·(1 + üv(τ)/g): exact on the linear pieces (`crossing`)."""
+        return self._first(t, level, vertical=self.vertical is not None)
+
+    def _first(self, t, level, vertical: bool):
         t = jnp.asarray(t, dtype=float)
-        a = jnp.abs(self.scale * self.acc)
         ts = self.times
-        now = jnp.abs(self(t)) > level
+        uv = self.vertical_acceleration if vertical else (lambda s: jnp.zeros_like(s))
+        uv_k = self.scale * self.vertical if vertical else jnp.zeros_like(self.acc)
+        now = jnp.abs(self(t)) > level * (1 + uv(t) / G)
         # first sample strictly after t that exceeds the level
-        hit = (ts > t) & (a > level)
+        hit = (ts > t) & (jnp.abs(self.scale * self.acc) > level * (1 + uv_k / G)) & (jnp.arange(self.n) < self.length)
         k = jnp.argmax(hit)
         found = jnp.any(hit)
-        # the crossing on the linear piece from max(t, t_{k-1}) to t_k (|üg| ≤ level at its start)
+        # the crossing on the linear piece from max(t, t_{k-1}) to t_k (no exceedance at its start)
         t_prev = jnp.maximum(ts[jnp.maximum(k - 1, 0)], t)
-        tau = crossing(t_prev, ts[k], self(t_prev), self.scale * self.acc[k], level)
+        tau = crossing(t_prev, ts[k], self(t_prev), self.scale * self.acc[k], level, uv(t_prev), uv_k[k])
         return jnp.where(now, t, jnp.where(found, tau, jnp.inf))
 
 
@@ -679,18 +722,18 @@ class WithVertical(AbstractExcitation):
     θ̈ = −p′²[(1 + üv/g) sin(α′ sgnθ − θ) + (üg/g) cos(α′ sgnθ − θ)] and a body at rest uplifts
     when |üg| > (g + üv) tanα′ (`uplift_time`); in the spring model it loads the column and the
     spring axially. Both components are any excitations: pulses with their own amplitude,
-    frequency and phase (`delay`), or a record pair (the same sample step, no delay). The body
+    frequency and phase (`delay`); a record pair is one `Record` (its `vertical` samples). The body
     stays on the ground only while g + üv > 0: the vertical peak must be below g.
 
     Attributes:
         horizontal: the horizontal component üg(t).
         vertical: the vertical component, before its delay.
         delay: the vertical component's time shift [s] (its phase against the horizontal one);
-            default 0; finite; 0 for a record pair.
+            default 0; finite.
 
     Raises:
-        JaxrockInputError: when a component is not an excitation or is itself a `WithVertical`; the
-            vertical peak (concrete) is not below g; a record pair has two sample steps or a delay.
+        JaxrockInputError: when a component is not an excitation, is itself a `WithVertical` or is a
+            `Record` (a pair is one `Record`); the vertical peak (concrete) is not below g.
 
     Example:
         ```python
@@ -706,27 +749,14 @@ class WithVertical(AbstractExcitation):
 
     def __check_init__(self):
         for name, part in (("horizontal", self.horizontal), ("vertical", self.vertical)):
+            if isinstance(part, Record):
+                raise JaxrockInputError(f"WithVertical {name} component is a Record: a record pair is one Record, "
+                                        "Record(acc, dt, vertical=acc_v) (jaxrock.read_record_pair reads two files)")
             if not isinstance(part, AbstractExcitation) or isinstance(part, WithVertical):
                 raise JaxrockInputError(f"WithVertical {name} component must be a one-component jaxrock excitation "
-                                        f"(a pulse, a Record), got {type(part).__name__}")
+                                        f"(a pulse), got {type(part).__name__}")
         check_range("delay (vertical component's time shift) [s]", self.delay, -math.inf, math.inf)
-        if isinstance(self.horizontal, Record) and isinstance(self.vertical, Record) and is_concrete(
-                (self.horizontal.dt, self.vertical.dt, self.delay)):
-            if not np.allclose(np.asarray(self.horizontal.dt), np.asarray(self.vertical.dt), rtol=1e-12, atol=0):
-                raise JaxrockInputError(f"record pair: horizontal dt = {float(self.horizontal.dt):g} s, vertical dt = "
-                                        f"{float(self.vertical.dt):g} s; valid: one sample step (resample one of them)")
-            if np.any(np.asarray(self.delay) != 0):
-                raise JaxrockInputError(f"record pair: delay = {float(self.delay):g} s; valid: 0 (a pair is recorded together)")
         check_limits(self.limits()[-1:])
-
-    @property
-    def sampled(self) -> bool:
-        return self.horizontal.sampled or self.vertical.sampled
-
-    @property
-    def _pair(self) -> bool:
-        """Both components sampled records (static): then both are linear on the same intervals."""
-        return isinstance(self.horizontal, Record) and isinstance(self.vertical, Record)
 
     def _vertical_peak(self):
         peak = self.vertical.peak
@@ -769,7 +799,7 @@ class WithVertical(AbstractExcitation):
 
     @property
     def step_ts(self):
-        # a record pair shares its samples (one dt, no delay: checked at construction)
+        # kinks of one component (a sine pulse has none in its window; a record pair is a Record)
         return self.horizontal.step_ts if self.horizontal.step_ts is not None else self.vertical.step_ts
 
     def step_ts_from(self, t, m: int):
@@ -787,11 +817,10 @@ class WithVertical(AbstractExcitation):
     def uplift_time(self, t, level):
         """First τ ≥ t with |üg(τ)| > level·(1 + üv(τ)/g) (`AbstractExcitation.uplift_time`).
 
-        A record pair: exact (F = |üg| − level(1 + üv/g) is convex on each sample interval, so
-        it exceeds 0 there only if it does at an end, and crosses 0 once, where üg has the sign it
-        has at that end: one linear root). Otherwise the first of `UPLIFT_GRID` equal intervals
-        from t to the window's end on which F exceeds 0 at an end, bisected: an exceedance shorter
-        than one interval (a 4096th of the window) can be missed.
+        The first of `UPLIFT_GRID` equal intervals from t to the window's end on which
+        F = |üg| − level(1 + üv/g) exceeds 0 at an end, bisected: an exceedance shorter than one
+        interval (a 4096th of the window) can be missed. (A record pair, `Record(vertical=...)`, is
+        exact: `crossing`.)
 
         Arguments:
             t (float | Array): time to search from [s].
@@ -802,20 +831,6 @@ class WithVertical(AbstractExcitation):
         """
         t = jnp.asarray(t, dtype=float)
         F = self._excess(level)
-        if self._pair:
-            h, v = self.horizontal, self.vertical
-            ts = h.times
-            inside = jnp.arange(h.n) < jnp.minimum(h.length, v.length)
-            Fk = jnp.abs(h.scale * h.acc) - level * (1 + v.scale * v.acc / G)
-            hit = (ts > t) & (Fk > 0) & inside
-            k = jnp.argmax(hit)
-            t_prev = jnp.maximum(ts[jnp.maximum(k - 1, 0)], t)
-            s = jnp.where(h.acc[k] >= 0, 1.0, -1.0)
-            L0 = s * h(t_prev) - level * (1 + v(t_prev) / G)
-            L1 = Fk[k]
-            frac = jnp.clip(-L0 / jnp.where(L1 - L0 > 0, L1 - L0, 1.0), 0.0, 1.0)
-            tau = jnp.where(L1 - L0 > 0, t_prev + frac * (ts[k] - t_prev), ts[k])
-            return jnp.where(F(t) > 0, t, jnp.where(jnp.any(hit), tau, jnp.inf))
         t_end = jnp.maximum(self.t_end, t)
         grid = t + (t_end - t) * jnp.linspace(0.0, 1.0, UPLIFT_GRID + 1)
         above = jax.vmap(F)(grid) > 0

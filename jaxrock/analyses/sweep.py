@@ -392,7 +392,8 @@ class Sweep:
         which = np.asarray(v["record"]).astype(int)
         scale = jnp.asarray(v.get("scale", np.ones(which.size)), dtype=float)
         longest = max(r.n for r in self.records)
-        padded = {r: self.records[r].padded(longest, "record") for r in np.unique(which).tolist()}
+        pairs = any(r.vertical is not None for r in self.records)  # one structure for pairs and single records
+        padded = {r: self.records[r].padded(longest, "record", vertical=pairs) for r in np.unique(which).tolist()}
         if len(padded) == 1:
             return jax.vmap(padded[int(which[0])].scaled)(scale)
         base = stack([padded[r] for r in which.tolist()])

@@ -333,6 +333,43 @@ def read_record(path: str | os.PathLike, **kw) -> Record:
     return reader(path, **kw)
 
 
+def read_record_pair(horizontal: str | os.PathLike, vertical: str | os.PathLike, *, units=None, name: str | None = None) -> Record:
+    """Read a horizontal/vertical pair of one event from two files into one `Record` (its `vertical`).
+
+    Each file is read by `read_record` with its own units; the shorter component is padded with
+    zeros to the longer's length (the pair ends with the longer one).
+
+    Arguments:
+        horizontal: the horizontal component's file.
+        vertical: the vertical component's file (upwards positive).
+        units (str | tuple[str, str] | None): the unit of both files, or (horizontal's, vertical's),
+            as `read_record` takes it; default None: each reader's default.
+        name: the pair's name; default None: the horizontal file's stem.
+
+    Returns:
+        The pair (`Record` with `vertical`), accelerations in m/s².
+
+    Raises:
+        JaxrockInputError: as `read_record` raises it, when the two sample steps differ (relative
+            1e-6), or the vertical peak is not below g.
+
+    Example:
+        ```python
+        import jaxrock
+        pair = jaxrock.read_record_pair("RSN1063_NS.AT2", "RSN1063_UP.AT2")
+        ```
+    """
+    hu, vu = units if isinstance(units, (tuple, list)) else (units, units)
+    h = read_record(horizontal, **({} if hu is None else {"units": hu}))
+    v = read_record(vertical, **({} if vu is None else {"units": vu}))
+    if not np.isclose(float(h.dt), float(v.dt), rtol=_UNIFORM_RTOL, atol=0.0):
+        raise JaxrockInputError(f"record pair {horizontal} + {vertical}: horizontal dt = {float(h.dt):g} s, vertical dt = "
+                                f"{float(v.dt):g} s; valid: one sample step (resample one of them)")
+    n = max(h.n, v.n)
+    pad = lambda r: np.pad(np.asarray(r.acc), (0, n - r.n))
+    return Record(pad(h), h.dt, name=name or Path(horizontal).stem, vertical=pad(v))
+
+
 RECORD_SUFFIXES = (".at2", ".txt", ".dat", ".csv")  # the files of a record folder (`read_records`)
 LIST_SUFFIX = ".list"  # a suite's list file (`read_records`)
 
@@ -345,13 +382,22 @@ def _builtin(entry: str, base: Path) -> bool:
     return (is_builtin_record(entry) or entry.strip().lower() == BUILTIN_SUITE) and not (base / entry).exists()
 
 
-def _list_entries(path: Path) -> list[str]:
+def _list_entries(path: Path) -> list[str | tuple[str, str]]:
     """The sources a list file names: one per line (a record file, a folder or a packaged record's
-    name; relative paths from the list file's folder), blank lines and `#` comments skipped."""
+    name; relative paths from the list file's folder), blank lines and `#` comments skipped. A line
+    of two record files separated by ` + ` is a horizontal/vertical pair (`read_record_pair`)."""
     entries = []
     for lineno, line in enumerate(_read_lines(path), start=1):
         entry = line.split("#", 1)[0].strip()
         if not entry:
+            continue
+        if " + " in entry and not (path.parent / entry).exists():
+            pair = tuple(part.strip() for part in entry.split(" + "))
+            missing = [part for part in pair if not (path.parent / part).is_file()]
+            if len(pair) != 2 or missing:
+                raise JaxrockInputError(f"{path}: line {lineno}: {entry}: a pair is two record files, 'HORIZONTAL + VERTICAL' "
+                                        f"(relative to {path.parent}){f'; no such file: {missing[0]}' if missing else ''}")
+            entries.append(tuple(str(path.parent / part) for part in pair))
             continue
         builtin = _builtin(entry, path.parent)
         if not builtin and not (path.parent / entry).exists():
@@ -368,7 +414,8 @@ def read_records(sources, *, units: str | None = None, _lists: tuple[str, ...] =
 
     Each source is a record file, a folder (its files ending in one of `RECORD_SUFFIXES`, .at2,
     .txt, .dat, .csv, any case, sorted by name), a list file (`*.list`: one such source per line,
-    relative to the list's folder, `#` comments), a packaged record's name (`builtin_record`) or
+    relative to the list's folder, `#` comments; a line `H.AT2 + V.AT2` is a horizontal/vertical pair,
+    `read_record_pair`), a packaged record's name (`builtin_record`) or
     `builtin`, all five packaged records (El Centro first); a file or folder of such a name in the
     working directory is read instead. Files are read by `read_record` and named by their file stem
     (unique within a folder).
@@ -395,6 +442,9 @@ def read_records(sources, *, units: str | None = None, _lists: tuple[str, ...] =
 
     out: list[Record] = []
     for src in [sources] if isinstance(sources, (str, os.PathLike)) else list(sources):
+        if isinstance(src, tuple):  # a pair from a list file
+            out.append(read_record_pair(*src, units=units))
+            continue
         if _builtin(str(src), Path(".")):
             suite = str(src).strip().lower() == BUILTIN_SUITE
             out += [builtin_record(n) for n in (RECORD_ALIASES[0], *PACKAGED_RECORDS)] if suite else [builtin_record(str(src))]

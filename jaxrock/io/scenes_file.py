@@ -228,7 +228,8 @@ class Scenes:
             values = {k: jnp.asarray(self.params[k][idx]) for k in ("a_p", "omega_p", *pulse_params_of(exc))}
             return jax.vmap(lambda v: scene_pulse(exc, None, v))(values)
         n = max(self.records[i].n for i in idx)  # records of distinct lengths, padded to one: one program
-        return stack([self.records[i].padded(n, "record").scaled(self.params["scale"][i]) for i in idx])
+        pairs = any(self.records[i].vertical is not None for i in idx)  # one structure for pairs and single records
+        return stack([self.records[i].padded(n, "record", vertical=pairs).scaled(self.params["scale"][i]) for i in idx])
 
 
 def _check_table(t: _Table, base: Path, cache: dict) -> tuple[dict, dict, list]:

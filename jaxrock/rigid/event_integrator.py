@@ -457,7 +457,7 @@ class RigidStepper(AbstractStepper):
         return out
 
     def _attempt(self, sc: _Scene, exc: SampledRecord, c: _Paced) -> _Paced:
-        """One step attempt of a paced run: a block at rest looks for |üg| > g tanα′ on the current
+        """One step attempt of a paced run: a block at rest looks for |üg| > (g + üv) tanα′ on the current
         sample interval; a rocking block takes one error-controlled step of the solver, to the next
         sample at most, and locates the first event (overturn, apex, impact: as the diffrax
         events) on the step's dense output."""
@@ -475,7 +475,7 @@ class RigidStepper(AbstractStepper):
 
         # at rest: uplift on this interval, else on to its end
         rest = active & (c.mode == _REST)
-        t_up = crossing(c.t, t_b, exc(c.t), exc(t_b), sc.level)
+        t_up = crossing(c.t, t_b, exc(c.t), exc(t_b), sc.level, exc.vertical_acceleration(c.t), exc.vertical_acceleration(t_b))
         up = rest & in_record & (t_up <= t_b)
         t_rest = jnp.where(up, t_up, t_b)
         side_up = -jnp.sign(exc(t_rest))
@@ -625,26 +625,35 @@ class RigidStepper(AbstractStepper):
 
 
 class _Piece(eqx.Module):
-    """üg on one sample interval of a record: linear from `a0` at `t0` (what `RigidStepper._attempt`
-    evaluates, seven times per step, without reading the record again)."""
+    """üg (and üv of a pair) on one sample interval of a record: linear from `a0` (`v0`) at `t0`
+    (what `RigidStepper._attempt` evaluates, seven times per step, without reading the record again)."""
 
     t0: Array
     a0: Array
     slope: Array
+    v0: Array
+    v_slope: Array
     max_step: Array
 
     @classmethod
     def of(cls, exc: SampledRecord, k, in_record) -> "_Piece":
         """Sample interval k of `exc` (zero after the record's end: `in_record` false)."""
-        a0, a1 = (exc.scale * exc.acc[jnp.minimum(i, exc.n - 1)] for i in (k, k + 1))
         dt = exc.dt
-        return cls(dt * k.astype(dt.dtype), jnp.where(in_record, a0, 0.0), jnp.where(in_record, (a1 - a0) / dt, 0.0), dt)
+
+        def linear(samples):
+            if samples is None:
+                return jnp.zeros_like(dt), jnp.zeros_like(dt)
+            x0, x1 = (exc.scale * samples[jnp.minimum(i, exc.n - 1)] for i in (k, k + 1))
+            return jnp.where(in_record, x0, 0.0), jnp.where(in_record, (x1 - x0) / dt, 0.0)
+
+        (a0, slope), (v0, v_slope) = linear(exc.acc), linear(exc.vertical)
+        return cls(dt * k.astype(dt.dtype), a0, slope, v0, v_slope, dt)
 
     def __call__(self, t):
         return self.a0 + (t - self.t0) * self.slope
 
     def vertical_acceleration(self, t):
-        return jnp.zeros_like(t)  # a paced run's record has no vertical component (`RigidStepper._paced`)
+        return self.v0 + (t - self.t0) * self.v_slope
 
 
 def _interval(exc: SampledRecord, t):

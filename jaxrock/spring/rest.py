@@ -54,8 +54,8 @@ def rest_grid(excitation: AbstractExcitation) -> tuple[Float[Array, ""], int, in
     """(h, n, sub-steps): the exact grid's step, its number of steps over the excitation's window
     and the sub-steps checked for a yield (n and sub-steps static); None for an excitation without
     one (the run then starts on the diffrax path)."""
-    if isinstance(excitation, SampledRecord):
-        return excitation.dt, excitation.n - 1, SUB_RECORD
+    if isinstance(excitation, SampledRecord):  # a pair's üv makes the equation parametric: no exact phase
+        return None if excitation.vertical is not None else (excitation.dt, excitation.n - 1, SUB_RECORD)
     if isinstance(excitation, AbstractRicker):
         return (excitation.t_end - excitation.t_start) / REST_STEPS, REST_STEPS, SUB_PULSE
     return None
