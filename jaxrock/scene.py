@@ -255,7 +255,8 @@ register_model_kind("spring", "jaxrock.spring.model:quasi_rigid_scene", (CBAR, "
                     "quasi-rigid spring model (SM), added masses")
 register_model_kind("spring-flexible", "jaxrock.spring.model:flexible_scene", (CBAR, E_COLUMN, RHO_COLUMN, ZETA_COLUMN, "backbone", "smoothing"),
                     "spring model with an elastic column (concrete by default)")
-register_model_kind("frame", "jaxrock.rigid.frame:scenes_file_model", (MASS_RATIO, ETA),
+# the frame's η is its own (`jaxrock.rigid.frame.frame_eta`), not a scene parameter: a scene's default η is Housner's
+register_model_kind("frame", "jaxrock.rigid.frame:scenes_file_model", (MASS_RATIO,),
                     "rocking frame: rigid columns capped by a rigid beam (Makris & Vassiliou 2013)")
 DEFAULT_MODEL = "rigid"
 

@@ -210,6 +210,8 @@ def test_cli_frame_spectrum(tmp_path):
     assert "frame model" in r.output and (tmp_path / "frame.nc").exists()
     r = invoke("spectrum", "--model", "frame", "--mass-ratio", "-1", "--out", out)
     assert r.exit_code == 2 and "mass" in r.output.lower()
+    r = invoke("spectrum", "--model", "frame", "--undamped", "--out", out)  # the frame's η is its impact law: nothing to switch off
+    assert r.exit_code == 2 and "--undamped" in r.output and len(r.output.strip().splitlines()) == 1, r.output
 
 
 def test_reproduce_frame_section(tmp_path):
@@ -225,3 +227,29 @@ def test_reproduce_frame_section(tmp_path):
     for cells in rows:
         least = [math.inf if c.strip() == "none" else float(c) for c in cells]
         assert least == sorted(least), least
+
+
+def test_frame_in_a_scenes_file_a_history_and_both_autodiff_modes(tmp_path):
+    """The frame through the other entry points: a scenes file row (model frame, mass_ratio) is
+    `simulate`'s; a history's peak is the summary's; forward mode (jvp) equals reverse mode (grad)."""
+    block = jr.Block.from_slenderness(8.0, 0.2)
+    a_p, omega_p = (float(x) for x in jr.pulse_of_ratios(block, 2.0, 3.0))
+    frame = jr.RockingFrame(block, 2.0)
+    pulse = jr.RickerPulse(a_p, omega_p)
+    sol = jr.simulate(frame, pulse)
+    (tmp_path / "scenes.csv").write_text(f"height,tan_alpha,model,mass_ratio,pulse,a_p,omega_p\n8,0.2,frame,2,symmetric,{a_p!r},{omega_p!r}\n")
+    r = invoke("batch", tmp_path / "scenes.csv", tmp_path / "out.csv", "-q")
+    assert r.exit_code == 0, r.output
+    row = (tmp_path / "out.csv").read_text().splitlines()[1].split(",")
+    header = (tmp_path / "out.csv").read_text().splitlines()[0].split(",")
+    assert float(row[header.index("max_theta")]) == pytest.approx(float(sol.max_theta), abs=1e-12)
+    ts = jnp.linspace(float(pulse.t_start), float(pulse.t_end) + 5.0, 4001)
+    hist = jr.simulate(frame, pulse, save=jr.Save(ts, ("theta",)))
+    assert float(jnp.max(jnp.abs(hist.history["theta"]))) / float(block.alpha) == pytest.approx(float(sol.max_theta), abs=1e-4)
+
+    def peak(gamma, integrator=None):
+        return jr.simulate(jr.RockingFrame(block, gamma), pulse, integrator=integrator).max_theta
+
+    reverse = float(jax.grad(peak)(2.0))
+    forward = float(jax.jvp(lambda g: peak(g, jr.EventIntegrator(autodiff="forward")), (2.0,), (1.0,))[1])
+    assert reverse < 0 and forward == pytest.approx(reverse, rel=1e-6)

@@ -103,7 +103,7 @@ def test_sweep_refuses_bad_values_in_one_line(tmp_path):
     for args, words in (
         (["--tan-alpha", "0.2,1.5"], "--tan-alpha = 1.5"),
         (["--eta", "0.5"], "--eta applies to --model rigid"),  # fine for rigid: no error expected below
-        (["--model", "spring", "--eta", "0.5"], "--eta applies to --model rigid / frame only"),
+        (["--model", "spring", "--eta", "0.5"], "--eta applies to --model rigid only"),
         (["--scale", "2"], "--scale applies to record sweeps"),
         (["--record", str(tmp_path)], "holds no record file"),
         (["--accel-ratio", "0,1"], "--accel-ratio"),

@@ -367,3 +367,24 @@ def test_suite_of_pairs(tmp_path):
     (tmp_path / "bad.list").write_text("h.txt + nowhere.txt\n")
     with pytest.raises(jr.JaxrockInputError, match="line 1: .*no such file: nowhere.txt"):
         jr.read_records([tmp_path / "bad.list"])
+
+
+def test_cli_runs_a_record_pair(tmp_path):
+    """`--record 'H + V'` (simulate, record-spectrum): the pair's run is `simulate`'s; a missing
+    component is one line, exit 2."""
+    h, v, dt = _pair(n=600)
+    (tmp_path / "h.txt").write_text("\n".join(f"{k * dt:.4f} {x:.12e}" for k, x in enumerate(h)))
+    (tmp_path / "v.txt").write_text("\n".join(f"{k * dt:.4f} {x:.12e}" for k, x in enumerate(v)))
+    pair = f"{tmp_path / 'h.txt'} + {tmp_path / 'v.txt'}"
+    r = invoke("simulate", "--record", pair, "--units", "m/s2", "--height", "3", "--tan-alpha", "0.15", "--json")
+    assert r.exit_code == 0, r.output
+    import json
+
+    got = json.loads(r.output)
+    want = jr.simulate(jr.RigidModel(jr.Block.from_slenderness(3.0, 0.15)), jr.Record(h, dt, vertical=v))
+    assert abs(float(got["max_theta"]) - float(want.max_theta)) < 1e-9, got
+    r = invoke("record-spectrum", "--record", pair, "--units", "m/s2", "--height", "2,4", "--scale", "0.5:2:4", "--refine", "1",
+               "--no-sensitivity", "--out", tmp_path / "rs")
+    assert r.exit_code == 0, r.output
+    r = invoke("simulate", "--record", f"{tmp_path / 'h.txt'} + {tmp_path / 'nowhere.txt'}")
+    assert r.exit_code == 2 and "nowhere.txt: file not found" in r.output and len(r.output.strip().splitlines()) == 1, r.output

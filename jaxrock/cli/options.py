@@ -169,6 +169,9 @@ def build_model(model: ModelKind | str, height: float, tan_alpha: float, tan_alp
         if kind not in takes(name):
             raise JaxrockInputError(f"{flag_of(name)} applies to --model {' / '.join(takes(name))} only, not {kind}")
     if undamped:
+        if not any(kind in takes(k) for k in UNDAMPED):
+            raise JaxrockInputError(f"--undamped: --model {kind} has no damping parameter to switch off "
+                                    f"({', '.join(flag_of(k) for k in UNDAMPED)} belong to other kinds)")
         for name in (k for k in UNDAMPED if kind in takes(k)):
             if name in given:
                 raise JaxrockInputError(f"give --undamped or {flag_of(name)}, not both")
@@ -290,9 +293,17 @@ def _excitation(block, pulse: str, record: Optional[str], scale: float, a_p, acc
             from ..io.records import read_record
             from ..scene import builtin_record_names
 
-            if not Path(record).exists():
-                raise JaxrockInputError(f"--record {record}: file not found, nor a packaged record ({builtin_record_names()})")
-            rec = read_record(record) if units is None else read_record(record, units=units)
+            parts = [p.strip() for p in record.split(" + ")] if " + " in record and not Path(record).exists() else [record]
+            for part in parts:
+                if len(parts) > 2 or not Path(part).exists():
+                    raise JaxrockInputError(f"--record {record}: {'a pair is two files, HORIZONTAL + VERTICAL' if len(parts) > 2 else f'{part}: file not found'}"
+                                            f"{'' if len(parts) > 1 else f', nor a packaged record ({builtin_record_names()})'}")
+            if len(parts) == 2:
+                from ..io.records import read_record_pair
+
+                rec = read_record_pair(*parts, units=units)
+            else:
+                rec = read_record(record) if units is None else read_record(record, units=units)
         return rec.scaled(scale), f"{rec.name} × {scale:g}"
     if units is not None:
         raise JaxrockInputError("--units applies to --record files, not to pulses")

@@ -20,7 +20,8 @@ from .app import QUIET_OPTION, TOL_HELP, app, FORCE_OPTION, JSON_OPTION
 @app.command("record-spectrum")
 @_guarded
 def record_spectrum(
-    record: str = typer.Option(RECORD_ALIASES[0], help=f"record file (.AT2 or two-column text), or a packaged record ({builtin_record_names()})"),
+    record: str = typer.Option(RECORD_ALIASES[0], help=f"record file (.AT2 or two-column text), a horizontal/vertical pair 'H + V', or a packaged record "
+                                                          f"({builtin_record_names()})"),
     model: ModelKind = model_option(DEFAULT_MODEL),
     tan_alpha: float = typer.Option(0.2, help="slenderness tanα"),
     tan_alpha_base: Optional[float] = typer.Option(None, help="extended rigid base tanα′"),

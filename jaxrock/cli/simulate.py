@@ -41,7 +41,8 @@ def simulate(
     accel_ratio: Optional[float] = typer.Option(None, help="pulse amplitude as a_p/(g tanα) (default 4)"),
     omega_p: Optional[float] = typer.Option(None, help="pulse frequency [rad/s] (default 2π)"),
     omega_ratio: Optional[float] = typer.Option(None, help="pulse frequency as ω_p/p"),
-    record: Optional[str] = typer.Option(None, help=f"a record file (.AT2 or two-column) or a packaged record ({builtin_record_names()}), instead of a pulse"),
+    record: Optional[str] = typer.Option(None, help=f"a record file (.AT2 or two-column), a horizontal/vertical pair 'H + V' of them, or a packaged "
+                                                    f"record ({builtin_record_names()}), instead of a pulse"),
     scale: float = typer.Option(1.0, help="factor on the record"),
     units: Optional[str] = typer.Option(None, help="acceleration units of the --record file: a two-column file is read in g unless this "
                                  "says otherwise (m/s2, cm/s2, mm/s2, in/s2, ft/s2); an .AT2 file states its own"),

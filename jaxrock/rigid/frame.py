@@ -156,6 +156,6 @@ class RockingFrame(AbstractModel):
         return self.equivalent.stepper(integrator, save, t1)
 
 
-def scenes_file_model(block: Block, mass_ratio=1.0, eta=None) -> RockingFrame:
-    """A scenes file's rocking frame: the builder of the model kind "frame" (`jaxrock.scene.MODEL_KINDS`)."""
-    return RockingFrame(block, mass_ratio=mass_ratio, eta=eta)
+def scenes_file_model(block: Block, mass_ratio=1.0) -> RockingFrame:
+    """A scenes file's rocking frame, with its own η: the builder of the model kind "frame" (`jaxrock.scene.MODEL_KINDS`)."""
+    return RockingFrame(block, mass_ratio=mass_ratio)
