@@ -167,6 +167,7 @@ def test_heavier_beam_is_more_stable():
         assert least[0] < least[1] < least[2], (wp, least)
 
 
+@pytest.mark.slow  # 13-15 s warm (8 scenes × grad + 2 central differences; a batch, a history and both modes)
 def test_frame_gradients_match_central_differences():
     """d max θ/α by the beam's mass ratio γ and the pulse amplitude, reverse mode, on 8 scenes."""
     checked = 0
@@ -229,6 +230,7 @@ def test_reproduce_frame_section(tmp_path):
         assert least == sorted(least), least
 
 
+@pytest.mark.slow  # 13-15 s warm (8 scenes × grad + 2 central differences; a batch, a history and both modes)
 def test_frame_in_a_scenes_file_a_history_and_both_autodiff_modes(tmp_path):
     """The frame through the other entry points: a scenes file row (model frame, mass_ratio) is
     `simulate`'s; a history's peak is the summary's; forward mode (jvp) equals reverse mode (grad)."""

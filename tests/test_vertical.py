@@ -180,6 +180,7 @@ def test_vertical_changes_the_answer():
     assert up < plain < down
 
 
+@pytest.mark.slow  # 13-15 s warm (8 scenes × grad + 2 central differences; a batch, a history and both modes)
 def test_gradients_through_vertical_match_central_differences():
     """d max θ/α against the vertical amplitude a_v and the horizontal a_p, reverse mode, on the
     8 scenes, against central differences of the same runs."""
