@@ -140,6 +140,11 @@ MOVED_TO_SLOW = {
     # default integrator's path, stays)
     "tests/test_backbone.py::test_generalized_alpha_lands_on_the_kinks_so_its_derivative_is_the_motions": "20 s; "
     "generalized-α through the kinks: flexible_derivatives_through_the_kinks_match_central_differences",
+    # ninth round (issue 60: README command 2 in a bare clone took 567 s cold; call seconds, warm)
+    "tests/test_protocol.py::test_a_plugin_kind_and_its_own_parameter_reach_every_entry_point": "25 s; a registered kind "
+    "and its own parameter on the command line: test_frame cli_frame_spectrum (the kind 'frame', --mass-ratio)",
+    "tests/test_sensitivity.py::test_the_spring_models_report_it_too": "17, 9, 3 s; the sensitivity of a run: "
+    "the_sensitivity_is_the_slope_of_the_motion_in_the_scale[2.0-3.0-RickerPulse], test_batch batch_sensitivity",
 }
 
 
