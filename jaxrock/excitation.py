@@ -124,6 +124,12 @@ class AbstractExcitation(eqx.Module):
         apply (`jaxrock.rigid.EventIntegrator.tolerances`). Default False."""
         return False
 
+    @property
+    def has_vertical(self) -> bool:
+        """Whether the excitation has a vertical component (static): the models leave its terms out
+        of a run without one (the same program, to the bit, as before vertical motion). Default False."""
+        return False
+
     def vertical_acceleration(self, t) -> Float[Array, ""]:
         """The vertical ground acceleration üv(t) [m/s², upwards]: 0 for a horizontal excitation
         (the default); `WithVertical` gives its vertical component.
@@ -507,20 +513,20 @@ class StillGround(AbstractExcitation):
         return jnp.full_like(jnp.asarray(t, dtype=float), jnp.inf)
 
 
-def crossing(t0, t1, a0, a1, level, v0=0.0, v1=0.0):
+def crossing(t0, t1, a0, a1, level, v0=None, v1=None):
     """The first time in [t0, t1] at which |üg| exceeds `level`·(1 + üv/g) where üg is linear from
     a0 (at t0) to a1 (at t1) and üv from v0 to v1 (+inf if none).
 
     F = |üg| − level (1 + üv/g) is convex on the piece: it exceeds 0 only if it does at an end, and
     crosses 0 once, where üg has the sign it has at t1 (F > 0 needs |üg| > 0 all the way to t1):
-    the root of the linear s üg − level (1 + üv/g)."""
+    the root of the linear s üg − level (1 + üv/g). Without üv (None): |üg| against `level`."""
     s = jnp.where(a1 >= 0, 1.0, -1.0)
-    L0, L1 = s * a0 - level * (1 + v0 / G), s * a1 - level * (1 + v1 / G)
+    l0, l1 = (level, level) if v0 is None else (level * (1 + v0 / G), level * (1 + v1 / G))
+    L0, L1 = s * a0 - l0, s * a1 - l1
     rise = L1 - L0
     frac = jnp.clip(-L0 / jnp.where(rise > 0, rise, 1.0), 0.0, 1.0)
     tau = jnp.where(rise > 0, t0 + frac * (t1 - t0), t1)
-    F0, F1 = jnp.abs(a0) - level * (1 + v0 / G), jnp.abs(a1) - level * (1 + v1 / G)
-    return jnp.where(F0 > 0, t0, jnp.where(F1 > 0, tau, jnp.inf))
+    return jnp.where(jnp.abs(a0) > l0, t0, jnp.where(jnp.abs(a1) > l1, tau, jnp.inf))
 
 
 class Record(AbstractExcitation):
@@ -601,6 +607,10 @@ class Record(AbstractExcitation):
     @property
     def sampled(self) -> bool:
         return True
+
+    @property
+    def has_vertical(self) -> bool:
+        return self.vertical is not None
 
     @property
     def n(self) -> int:
@@ -702,16 +712,18 @@ class Record(AbstractExcitation):
     def _first(self, t, level, vertical: bool):
         t = jnp.asarray(t, dtype=float)
         ts = self.times
-        uv = self.vertical_acceleration if vertical else (lambda s: jnp.zeros_like(s))
-        uv_k = self.scale * self.vertical if vertical else jnp.zeros_like(self.acc)
-        now = jnp.abs(self(t)) > level * (1 + uv(t) / G)
+        # the level at time t and at the samples: level (1 + üv/g) with a vertical component
+        at = (lambda s: level * (1 + self.vertical_acceleration(s) / G)) if vertical else (lambda s: level)
+        at_k = level * (1 + self.scale * self.vertical / G) if vertical else level
+        now = jnp.abs(self(t)) > at(t)
         # first sample strictly after t that exceeds the level
-        hit = (ts > t) & (jnp.abs(self.scale * self.acc) > level * (1 + uv_k / G)) & (jnp.arange(self.n) < self.length)
+        hit = (ts > t) & (jnp.abs(self.scale * self.acc) > at_k)
         k = jnp.argmax(hit)
         found = jnp.any(hit)
         # the crossing on the linear piece from max(t, t_{k-1}) to t_k (no exceedance at its start)
         t_prev = jnp.maximum(ts[jnp.maximum(k - 1, 0)], t)
-        tau = crossing(t_prev, ts[k], self(t_prev), self.scale * self.acc[k], level, uv(t_prev), uv_k[k])
+        v = (self.vertical_acceleration(t_prev), self.scale * self.vertical[k]) if vertical else (None, None)
+        tau = crossing(t_prev, ts[k], self(t_prev), self.scale * self.acc[k], level, *v)
         return jnp.where(now, t, jnp.where(found, tau, jnp.inf))
 
 
@@ -757,6 +769,10 @@ class WithVertical(AbstractExcitation):
                                         f"(a pulse), got {type(part).__name__}")
         check_range("delay (vertical component's time shift) [s]", self.delay, -math.inf, math.inf)
         check_limits(self.limits()[-1:])
+
+    @property
+    def has_vertical(self) -> bool:
+        return True
 
     def _vertical_peak(self):
         peak = self.vertical.peak

@@ -327,7 +327,8 @@ def test_record_pair_paced_summary_against_history_and_scipy():
     plain = jr.simulate(model, jr.Record(h, dt))
     assert abs(float(plain.max_theta) - float(summary.max_theta)) > 1e-3  # the vertical component is felt
     zero = jr.simulate(model, jr.Record(h, dt, vertical=np.zeros_like(v)))
-    assert float(zero.max_theta) == pytest.approx(float(plain.max_theta), abs=1e-12)
+    # two programs (the plain record's leaves the vertical terms out): their rounding differs, 2.2e-12 measured
+    assert float(zero.max_theta) == pytest.approx(float(plain.max_theta), abs=1e-10)
 
 
 def test_read_record_pair(tmp_path):

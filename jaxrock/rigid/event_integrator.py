@@ -475,7 +475,8 @@ class RigidStepper(AbstractStepper):
 
         # at rest: uplift on this interval, else on to its end
         rest = active & (c.mode == _REST)
-        t_up = crossing(c.t, t_b, exc(c.t), exc(t_b), sc.level, exc.vertical_acceleration(c.t), exc.vertical_acceleration(t_b))
+        v = (exc.vertical_acceleration(c.t), exc.vertical_acceleration(t_b)) if exc.has_vertical else (None, None)
+        t_up = crossing(c.t, t_b, exc(c.t), exc(t_b), sc.level, *v)
         up = rest & in_record & (t_up <= t_b)
         t_rest = jnp.where(up, t_up, t_b)
         side_up = -jnp.sign(exc(t_rest))
@@ -588,9 +589,11 @@ class RigidStepper(AbstractStepper):
         alpha, p, eta, integ = sc.alpha, sc.p, sc.eta, self.integrator
         theta_dot_impact = eta * theta_dot_f
         side_imp = -side
-        s_ug, gv = side_imp * exc(tf) / G, 1 + exc.vertical_acceleration(tf) / G
-        a_s = p**2 * jnp.cos(alpha) * (gv * jnp.tan(alpha) + s_ug)
-        a_o = p**2 * jnp.cos(alpha) * (gv * jnp.tan(alpha) - s_ug)
+        s_ug, tan_a = side_imp * exc(tf) / G, jnp.tan(alpha)
+        if exc.has_vertical:
+            tan_a = (1 + exc.vertical_acceleration(tf) / G) * tan_a
+        a_s = p**2 * jnp.cos(alpha) * (tan_a + s_ug)
+        a_o = p**2 * jnp.cos(alpha) * (tan_a - s_ug)
         v = jnp.abs(theta_dot_impact)
         both = (a_s > 0) & (a_o > 0)
         t_zeno = 2 * v / (1 - eta**2 + sc.tiny) * (1 / jnp.where(both, a_s, 1.0) + eta / jnp.where(both, a_o, 1.0))
@@ -631,9 +634,9 @@ class _Piece(eqx.Module):
     t0: Array
     a0: Array
     slope: Array
-    v0: Array
-    v_slope: Array
     max_step: Array
+    v0: Array | None = None  # a pair's üv (None: no vertical component)
+    v_slope: Array | None = None
 
     @classmethod
     def of(cls, exc: SampledRecord, k, in_record) -> "_Piece":
@@ -641,13 +644,15 @@ class _Piece(eqx.Module):
         dt = exc.dt
 
         def linear(samples):
-            if samples is None:
-                return jnp.zeros_like(dt), jnp.zeros_like(dt)
             x0, x1 = (exc.scale * samples[jnp.minimum(i, exc.n - 1)] for i in (k, k + 1))
             return jnp.where(in_record, x0, 0.0), jnp.where(in_record, (x1 - x0) / dt, 0.0)
 
-        (a0, slope), (v0, v_slope) = linear(exc.acc), linear(exc.vertical)
-        return cls(dt * k.astype(dt.dtype), a0, slope, v0, v_slope, dt)
+        v = linear(exc.vertical) if exc.has_vertical else (None, None)
+        return cls(dt * k.astype(dt.dtype), *linear(exc.acc), dt, *v)
+
+    @property
+    def has_vertical(self) -> bool:
+        return self.v0 is not None
 
     def __call__(self, t):
         return self.a0 + (t - self.t0) * self.slope

@@ -101,14 +101,14 @@ class RockingFrame(AbstractModel):
         check_limits(self.limits())
 
     @classmethod
-    def from_beam(cls, block: Block, beam_over_column, n_columns: int, **kw) -> "RockingFrame":
+    def from_beam(cls, block: Block, beam_over_column, n_columns: int, **kw: float) -> "RockingFrame":
         """A frame of `n_columns` columns whose beam weighs `beam_over_column` × one column: γ = ratio/N.
 
         Arguments:
             block: one column.
             beam_over_column (float | Array): m_b/m [–], ≥ 0.
             n_columns: N, ≥ 1.
-            **kw: `eta`, `threshold`.
+            **kw (float | Array): `eta`, `threshold`.
         """
         if int(n_columns) < 1:
             raise JaxrockInputError(f"n_columns = {n_columns}; valid: ≥ 1")

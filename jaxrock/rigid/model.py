@@ -83,7 +83,10 @@ class RigidModel(AbstractModel):
         """
         a, p = self.block.alpha_r, self.block.p_r
         phi = side * a - theta
-        return -(p**2) * ((1 + excitation.vertical_acceleration(t) / G) * jnp.sin(phi) + excitation(t) / G * jnp.cos(phi))
+        weight = jnp.sin(phi)
+        if excitation.has_vertical:
+            weight = (1 + excitation.vertical_acceleration(t) / G) * weight
+        return -(p**2) * (weight + excitation(t) / G * jnp.cos(phi))
 
     def _free(self, theta, theta_dot, side):
         """(overturns, next peak |θ| [rad]) of free rocking from (θ, θ̇) on `side` (`jaxrock.rigid.event_integrator`)."""

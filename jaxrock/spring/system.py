@@ -232,10 +232,11 @@ class AbstractSpringSystem(eqx.Module):
         column (`_gravity_force`) and the spring's moment, which the weight holds (My = m g b′); that
         share is a ground load, in f_ext (so the input work balances the energy)."""
         f_ext, f_col, f_dcol = self._column_terms(q, v, excitation(t))
-        uv = excitation.vertical_acceleration(t) / G
-        f_ext = f_ext + uv * self._gravity_force(q)
-        if not self.fixed_base:
-            f_ext = f_ext.at[0].add(-uv * self.spring_moment(q[0]))
+        if excitation.has_vertical:
+            uv = excitation.vertical_acceleration(t) / G
+            f_ext = f_ext + uv * self._gravity_force(q)
+            if not self.fixed_base:
+                f_ext = f_ext.at[0].add(-uv * self.spring_moment(q[0]))
         f_nospring = f_ext + f_col - f_dcol
         if self.fixed_base:
             f_sp = jnp.zeros_like(q)
@@ -248,7 +249,10 @@ class AbstractSpringSystem(eqx.Module):
         """Spring + damper moment (1 + üv/g) M(θ) + c θ̇ [N·m]; for a fixed base the reaction moment."""
         if self.fixed_base:
             return self.forces(t, q, v, excitation)[3][0]
-        return (1 + excitation.vertical_acceleration(t) / G) * self.spring_moment(q[0]) + self.c * v[0]
+        moment = self.spring_moment(q[0])
+        if excitation.has_vertical:
+            moment = (1 + excitation.vertical_acceleration(t) / G) * moment
+        return moment + self.c * v[0]
 
     # -- second-order form (generalized-α) -------------------------------------------------------
     def forces_without_spring(self, t, q, v, excitation):
