@@ -44,8 +44,11 @@ _EXPORTS = {
                      "SpringIntegrator", "GeneralizedAlpha", "Checked", "AbstractBackbone", "Bilinear", "Tanh", "cbar_eq17", "first_period_eq21", "pushover_eq9"], "spring"),
     **dict.fromkeys(["el_centro", "builtin_record", "read_at2", "read_record", "read_record_pair", "read_records", "read_two_column"], "io.records"),
     "read_scenes": "io.scenes_file",
-    **dict.fromkeys(["record_measures", "suite_measures"], "intensity"),
-    "fit_lognormal": "analyses.fragility",
+    **dict.fromkeys(["record_measures", "suite_measures", "spectral_acceleration", "intensity_of"], "intensity"),
+    **dict.fromkeys(["fit_lognormal", "fit_truncated_ida"], "analyses.fragility"),
+    **dict.fromkeys(["HazardCurve", "mean_annual_frequency", "probability_in_years"], "analyses.hazard"),
+    "risk_analysis": "analyses.risk",
+    "run_suite": "analyses.suite",
     **dict.fromkeys(["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
                      "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
                      "rm_target", "Sweep", "run_sweep", "least_overturning_scale", "overturning_probability", "Boundary", "find_boundary",
@@ -89,8 +92,16 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
         read_record_pair as read_record_pair, read_records as read_records, read_two_column as read_two_column,
     )
     from .io.scenes_file import read_scenes as read_scenes
-    from .intensity import record_measures as record_measures, suite_measures as suite_measures
-    from .analyses.fragility import fit_lognormal as fit_lognormal
+    from .intensity import (
+        record_measures as record_measures, suite_measures as suite_measures, spectral_acceleration as spectral_acceleration,
+        intensity_of as intensity_of,
+    )
+    from .analyses.fragility import fit_lognormal as fit_lognormal, fit_truncated_ida as fit_truncated_ida
+    from .analyses.hazard import (
+        HazardCurve as HazardCurve, mean_annual_frequency as mean_annual_frequency, probability_in_years as probability_in_years,
+    )
+    from .analyses.risk import risk_analysis as risk_analysis
+    from .analyses.suite import run_suite as run_suite
     from .analyses import (
         Spectrum as Spectrum, RecordSpectrum as RecordSpectrum, overturning_spectrum as overturning_spectrum,
         record_overturning_scale as record_overturning_scale, refine_boundaries as refine_boundaries, run_batch as run_batch,

@@ -520,3 +520,114 @@ def plot_curves(panels, *, ncols=None, path=None, title=None):
     if title:
         fig.suptitle(title)
     return _finish(fig, path, data)
+
+
+def _risk_figure(risk, draw, path, title, sharey=True):
+    """A figure of a suite's risk analysis: one row per model, one panel per column (cell); `draw(ax,
+    one, first)` draws the panel of `one` (the dataset at a model and a cell) and returns its data."""
+    import itertools
+
+    cells = [d for d in risk.ds_median.dims if d not in ("model", "damage_state", "im")]
+    combos = list(itertools.product(*(range(risk.sizes[d]) for d in cells))) or [()]
+    nr, nc = risk.sizes["model"], len(combos)
+    fig, axes = plt.subplots(nr, nc, figsize=(3.6 * nc, 3.1 * nr), squeeze=False, sharey=sharey)
+    data = []
+    for r in range(nr):
+        for c, idx in enumerate(combos):
+            sel = dict(zip(cells, idx))
+            one = risk.isel(model=r, **sel)
+            label = ", ".join([str(risk.model.values[r]), *(f"{d} = {float(risk[d][i]):g}" for d, i in sel.items())])
+            axes[r, c].set_title(label, fontsize=8)
+            data.append({"label": label, **draw(axes[r, c], one, c == 0)})
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _finish(fig, path, data)
+
+
+def plot_damage_states(risk, *, path=None, title=None, im: int = 0):
+    """The fragility family of a suite's damage states against its `im`-th measure: one curve per
+    state (max θ/α ≥ d; 1: overturning) with its bootstrap 16–84 % band. `risk`:
+    `jaxrock.analyses.risk.risk_analysis`."""
+    from .analyses.fragility import band, probability
+
+    spec, units = str(risk.im.values[im]), risk.attrs["im_units"][im]
+    xs = risk.ida_im.isel(im=im).values
+    x = np.exp(np.linspace(np.log(np.nanmin(xs)), np.log(np.nanmax(xs)), 300))
+
+    def draw(ax, one, first):
+        curves = []
+        for s, d in enumerate(risk.damage_state.values):
+            f = one.isel(im=im, damage_state=s)
+            m, b = float(f.ds_median), float(f.ds_beta)
+            if not np.isfinite(m):
+                continue
+            colour = plt.get_cmap("viridis")(s / max(risk.sizes["damage_state"] - 1, 1))
+            lo, hi = band(x, f.ds_median_boot.values, f.ds_beta_boot.values)
+            ax.fill_between(x, lo, hi, color=colour, alpha=0.2)
+            ax.plot(x, probability(x, m, b), color=colour, lw=1.6,
+                    label=("overturning" if d >= 1 else f"θ/α ≥ {d:g}") + f": θ = {m:.3g}, β = {b:.2f}")
+            curves.append({"damage_state": float(d), "median": m, "beta": b})
+        ax.set_xscale("log")
+        ax.set_xlabel(f"{spec} [{units}]")
+        if first:
+            ax.set_ylabel("P(damage state reached)")
+        ax.set_ylim(0, 1)
+        ax.legend(fontsize=6)
+        return {"curves": curves}
+
+    return _risk_figure(risk, draw, path, title)
+
+
+def plot_ida(risk, *, path=None, title=None, im: int = 0):
+    """IDA curves of a suite: each record's max θ/α against its intensity (the `im`-th measure) over
+    the factors, flat at 1 from overturning on; a record that stands again at a larger factor (a
+    resurrection) drawn dashed; the median and 16/84 % curves over the records."""
+    from .analyses.risk import ida_curves
+
+    spec, units = str(risk.im.values[im]), risk.attrs["im_units"][im]
+
+    def draw(ax, one, first):
+        x = one.ida_im.isel(im=im).transpose("record", "scale").values
+        edp = one.ida_edp.transpose("record", "scale").values
+        for r in range(x.shape[0]):
+            ax.plot(edp[r], x[r], "--" if int(one.windows[r]) else "-", color="0.6", lw=0.8)
+        grid, (p16, p50, p84) = ida_curves(edp, x)
+        ax.plot(p50, grid, "k-", lw=1.8, label="median")
+        ax.plot(p16, grid, "k:", lw=1.2, label="16 / 84 %")
+        ax.plot(p84, grid, "k:", lw=1.2)
+        ax.set_yscale("log")
+        ax.set_xlim(0, 1.05)
+        ax.set_xlabel("max θ/α (1: overturned)")
+        if first:
+            ax.set_ylabel(f"{spec} [{units}]")
+            ax.legend(fontsize=7)
+        return {"im": grid, "p16": p16, "p50": p50, "p84": p84}
+
+    return _risk_figure(risk, draw, path, title, sharey=False)
+
+
+def plot_deaggregation(risk, *, path=None, title=None):
+    """The deaggregation of each damage state's mean annual frequency over the hazard's measure: the
+    share of λ_DS per unit ln x, P(DS|x) |dλ/dx| x / λ_DS, one curve per state."""
+    x = risk.hazard_im.values
+    units = risk.attrs["im_units"][0]
+
+    def draw(ax, one, first):
+        out = []
+        for s, d in enumerate(risk.damage_state.values):
+            colour = plt.get_cmap("viridis")(s / max(risk.sizes["damage_state"] - 1, 1))
+            y = one.deaggregation.isel(damage_state=s).values
+            ax.plot(x, y, color=colour, lw=1.6, label=("overturning" if d >= 1 else f"θ/α ≥ {d:g}") + f": λ = {float(one.maf[s]):.2g}/yr")
+            out.append({"damage_state": float(d), "density": y})
+        ax.set_xscale("log")
+        ax.set_xlabel(f"{risk.im.values[0]} [{units}]")
+        if first:
+            ax.set_ylabel("share of λ per unit ln x")
+        ax.legend(fontsize=6)
+        return {"x": x, "states": out}
+
+    return _risk_figure(risk, draw, path, title)
+
+
+__all__ += ["plot_damage_states", "plot_ida", "plot_deaggregation"]

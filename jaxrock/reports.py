@@ -253,3 +253,134 @@ def suite_files(ds, out: Path, title: str) -> dict[str, Path]:
 
 
 __all__ = ["CalibrationReport", "calibration_report", "spectrum_files", "record_spectrum_files", "suite_files"]
+
+
+PELICUN_DEMANDS = {"pga": ("Peak Ground Acceleration", "g"), "pgv": ("Peak Ground Velocity", "mps")}  # + Sa: "Peak Spectral Acceleration|T"
+
+
+def _cell_rows(risk):
+    """(model index, cell index tuple, {name: value}) of every model × cell of a risk dataset."""
+    cells = [d for d in risk.ds_median.dims if d not in ("model", "damage_state", "im")]
+    fixed = {c: float(risk[c]) for c in risk.coords if risk[c].ndim == 0}
+    for m in range(risk.sizes["model"]):
+        for idx in np.ndindex(*(risk.sizes[d] for d in cells)):
+            yield m, dict(zip(cells, idx)), {"model": str(risk.model.values[m]), **fixed, **{d: float(risk[d][i]) for d, i in zip(cells, idx)}}
+
+
+def _pelicun_demand(spec: str, units: str, T1: float):
+    """pelicun's demand type and unit of an intensity measure, and the factor from jaxrock's SI
+    value; None for a measure pelicun has no demand type for."""
+    from .geometry import G
+
+    if spec in PELICUN_DEMANDS:
+        name, unit = PELICUN_DEMANDS[spec]
+        return name, unit, (1.0 / G if unit == "g" else 1.0)
+    if spec.startswith("sa:"):
+        period = T1 if spec == "sa:T1" else float(spec[3:])
+        return f"Peak Spectral Acceleration|{period:.4g}", "g", 1.0 / G
+    return None
+
+
+def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
+    """Write a suite's risk analysis (`jaxrock.analyses.risk.risk_analysis`) into `out`: the damage
+    states' fragilities `damage_states.csv` and `damage_states.png`, their pelicun fragility table
+    `pelicun_fragility.csv` (pelicun's columns: Demand-Type, Demand-Unit, LSk-Family, LSk-Theta_0 the
+    median, LSk-Theta_1 the dispersion; one row per model × column × measure pelicun names: PGA, PGV,
+    Sa), the IDA curves `ida.csv` and `ida.png`, the measures' efficiency and sufficiency
+    `efficiency.csv` and `efficiency.md`, and with a hazard the mean annual frequencies `risk.csv`,
+    `risk.md` and the deaggregation `deaggregation.png`."""
+    from .plotting import plot_damage_states, plot_deaggregation, plot_ida
+    from .spring import Column, first_period_eq21
+
+    out = Path(out)
+    files = {}
+    ims, units = [str(i) for i in risk.im.values], list(risk.attrs["im_units"])
+    states = risk.damage_state.values
+    rows, pel, eff, maf = [], [], [], []
+    for m, sel, head in _cell_rows(risk):
+        one = risk.isel(model=m, **sel)
+        for i, spec in enumerate(ims):
+            for s, d in enumerate(states):
+                f = one.isel(im=i, damage_state=s)
+                rows.append({**head, "im": spec, "im_units": units[i], "damage_state": float(d), "median": float(f.ds_median),
+                             "median_5": float(f.ds_median_ci[0]), "median_95": float(f.ds_median_ci[1]), "beta": float(f.ds_beta),
+                             "beta_5": float(f.ds_beta_ci[0]), "beta_95": float(f.ds_beta_ci[1]), "n": int(f.ds_n),
+                             "n_reached": _count(f.ds_n_reached), "crosses_next": int(f.crosses)})
+            T1 = float(first_period_eq21(head.get("height", np.nan), head.get("tan_alpha", np.nan), Column.concrete().E, Column.concrete().rho))
+            demand = _pelicun_demand(spec, units[i], T1)
+            if demand is not None and np.isfinite(one.ds_median.isel(im=i).values).all():
+                name, unit, factor = demand
+                ident = ".".join([head["model"], *(f"{k}={v:g}" for k, v in head.items() if k != "model")])
+                row = {"ID": ident, "Incomplete": 0, "Demand-Type": name, "Demand-Unit": unit, "Demand-Offset": 0, "Demand-Directional": 1}
+                for s in range(states.size):
+                    f = one.isel(im=i, damage_state=s)
+                    row |= {f"LS{s + 1}-Family": "lognormal", f"LS{s + 1}-Theta_0": float(f.ds_median) * factor,
+                            f"LS{s + 1}-Theta_1": float(f.ds_beta)}
+                pel.append(row)
+            f = one.isel(im=i, damage_state=-1)
+            eff.append({**head, "im": spec, "im_units": units[i], "beta": float(f.ds_beta), "ida_median": float(one.ida_median[i]),
+                        "ida_beta": float(one.ida_beta[i]), "sufficiency_slope": float(one.sufficiency_slope[i]),
+                        "sufficiency_p": float(one.sufficiency_p[i])})
+        if "maf" in risk:
+            for s, d in enumerate(states):
+                lam = float(one.maf[s])
+                maf.append({**head, "im": ims[0], "damage_state": float(d), "maf": lam, "maf_16": float(one.maf_band[s, 0]),
+                            "maf_84": float(one.maf_band[s, 1]), "return_period": 1.0 / lam if lam > 0 else float("inf"),
+                            f"p_{risk.attrs['years']:g}_years": float(one.p_years[s])})
+    files["damage_states"] = write_table(out / "damage_states.csv", rows)
+    if pel:
+        files["pelicun"] = write_table(out / "pelicun_fragility.csv", pel)
+    ida = []
+    cells = [d for d in risk.ds_median.dims if d not in ("model", "damage_state", "im")]
+    for m, sel, head in _cell_rows(risk):
+        one = risk.isel(model=m, **sel)
+        for r in range(risk.sizes["record"]):
+            for k in range(risk.sizes["scale"]):
+                ida.append({**head, "record": str(risk.record.values[r]), "scale": float(risk.scale[k]),
+                            **{spec: float(one.ida_im[i, r, k]) for i, spec in enumerate(ims)},
+                            "max_theta": float(one.ida_edp[r, k]), "resurrections": int(one.windows[r])})
+    files["ida"] = write_table(out / "ida.csv", ida, footer="max_theta: max θ/α of the run, 1 from overturning on; resurrections: "
+                               "the record's turns from overturned back to standing as the factor grows")
+    files["efficiency_csv"] = write_table(out / "efficiency.csv", eff)
+    # the summary: per model and measure, the median over the columns of each dispersion
+    md = ["| model | measure | β (overturning, stripes) | β (truncated IDA) | sufficiency slope (p) |", "|---|---|---|---|---|"]
+    best = {}
+    for mod in risk.model.values:
+        for spec in ims:
+            mine = [e for e in eff if e["model"] == str(mod) and e["im"] == spec]
+            b = np.nanmedian([e["beta"] for e in mine]) if any(np.isfinite(e["beta"]) for e in mine) else np.nan
+            bi = np.nanmedian([e["ida_beta"] for e in mine]) if any(np.isfinite(e["ida_beta"]) for e in mine) else np.nan
+            sl = np.nanmedian([e["sufficiency_slope"] for e in mine]) if any(np.isfinite(e["sufficiency_slope"]) for e in mine) else np.nan
+            pv = np.nanmedian([e["sufficiency_p"] for e in mine]) if any(np.isfinite(e["sufficiency_p"]) for e in mine) else np.nan
+            md.append(f"| {mod} | {spec} | {b:.3f} | {bi:.3f} | {sl:.3f} ({pv:.2g}) |")
+            if np.isfinite(bi):
+                best.setdefault(str(mod), []).append((bi, spec))
+    note = ("Efficiency: the dispersion β of each measure's overturning fit (median over the columns); the smaller, the more "
+            "efficient. Sufficiency: the slope of ln(collapse intensity / median) against ln(PGV/PGA) over the records; "
+            "a sufficient measure leaves none (p large). Most efficient (truncated IDA): "
+            + (", ".join(f"{k}: " + " = ".join(sp for b, sp in v if b <= min(v)[0] * (1 + 1e-9)) for k, v in best.items()) or "none fitted")
+            + " (measures proportional to each other on a column, PGA and PGA/(g tanα), tie).")
+    text = f"# {title}: intensity measures\n\n" + "\n".join(md) + f"\n\n{note}\n"
+    files["efficiency"] = write_output(out / "efficiency.md", lambda tmp: Path(tmp).write_text(text, encoding="utf-8"), text_head(text))
+    plt.close(plot_damage_states(risk, path=out / "damage_states.png", title=f"{title}: damage states ({ims[0]})"))
+    plt.close(plot_ida(risk, path=out / "ida.png", title=f"{title}: IDA curves ({ims[0]})"))
+    files["damage_states_png"], files["ida_png"] = out / "damage_states.png", out / "ida.png"
+    if maf:
+        files["risk_csv"] = write_table(out / "risk.csv", maf)
+        years = risk.attrs["years"]
+        md = [f"| model | {' | '.join(cells)} | damage state | MAF [1/yr] | 16–84 % | return period [yr] | P in {years:g} yr |",
+              "|" + "---|" * (6 + len(cells))]
+        for r in maf:
+            md.append("| " + " | ".join([r["model"], *(f"{r[d]:g}" for d in cells), f"{r['damage_state']:g}", f"{r['maf']:.3g}",
+                                         f"{r['maf_16']:.3g}–{r['maf_84']:.3g}", f"{r['return_period']:.4g}",
+                                         f"{r[f'p_{years:g}_years']:.3g}"]) + " |")
+        note = (f"Mean annual frequency λ = ∫ P(DS | x) |dλ/dx| dx of each damage state (max θ/α ≥ the state; 1: overturning) "
+                f"against {ims[0]}, hazard {risk.attrs['hazard']}; band: bootstrap over records; P = 1 − exp(−λ T).")
+        text = f"# {title}: risk\n\n" + "\n".join(md) + f"\n\n{note}\n"
+        files["risk"] = write_output(out / "risk.md", lambda tmp: Path(tmp).write_text(text, encoding="utf-8"), text_head(text))
+        plt.close(plot_deaggregation(risk, path=out / "deaggregation.png", title=f"{title}: deaggregation over {ims[0]}"))
+        files["deaggregation_png"] = out / "deaggregation.png"
+    return files
+
+
+__all__ += ["risk_files"]

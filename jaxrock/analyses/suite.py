@@ -223,18 +223,20 @@ def overturning_probability(sweep: Sweep, ds, n: int, devices=None) -> np.ndarra
 
 
 def _check_im(im: str) -> None:
-    from ..intensity import SCALING
+    """`im` is "scale" or a measure `jaxrock.intensity.parse_im` takes that grows with the factor."""
+    from ..intensity import parse_im
 
-    if im != "scale" and im not in SCALING:
-        raise JaxrockInputError(f"im = {im!r}; valid: scale, {', '.join(SCALING)}")
+    if im != "scale" and parse_im(im)[2] == 0:
+        raise JaxrockInputError(f"im = {im!r}: does not scale with the record; a fragility needs a measure that grows with the factor")
 
 
-def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None, seed: int = 0):
+def suite_fragility(ds, measures, im: str = "pga", *, records=None, n_boot: int | None = None, seed: int = 0):
     """The lognormal fragility (`jaxrock.analyses.fragility.fit_lognormal`) of each column of a
     suite's sweep `ds` (`least_overturning_scale`'s dataset), against the intensity `im`: a
-    measure of `jaxrock.intensity.SCALING` ("pga", "pgv", "pgd", "arias"; of the scaled record:
-    factor^power × the record's measure, from `measures`, `suite_measures`) or "scale" (the
-    factor itself). The observations are every record × factor of the sweep whose run ended ok
+    measure of `jaxrock.intensity.SCALING` ("pga", "pgv", "pgd", "arias", ...; of the scaled record:
+    factor^power × the record's measure, from `measures`, `suite_measures`), "scale" (the
+    factor itself), or any other measure of `jaxrock.intensity.parse_im` (Sa at a period or at the
+    column's T₁, the rocking-specific ratios: computed per record and column from `records`). The observations are every record × factor of the sweep whose run ended ok
     (the others are counted in `n_failed`), each its verdict, or its `p_overturn` where `ds` has
     one (`overturning_probability`: an uncertain verdict's ensemble fraction); the bootstrap
     resamples records. Returns an
@@ -249,24 +251,32 @@ def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None,
     _check_im(im)
     n_boot = N_BOOT if n_boot is None else int(n_boot)
     scale = ds.scale.values
-    if im == "scale":
-        x = np.broadcast_to(scale, (ds.sizes["record"], scale.size))
-        units = "1"
-    else:
-        x = scale[None, :] ** SCALING[im] * measures[im].sel(record=ds.record).values[:, None]
-        units = MEASURES[im][1]
-    group = np.broadcast_to(np.arange(ds.sizes["record"])[:, None], x.shape)
     over = (ds.p_overturn if "p_overturn" in ds else ds.overturned).transpose("record", ..., "scale").values
     status = ds.status.transpose("record", ..., "scale").values
     cell_shape = over.shape[1:-1]
+    if im == "scale":
+        x = np.ones((ds.sizes["record"], *cell_shape, 1)) * scale
+        units = "1"
+    elif im in SCALING and im in measures:
+        x = np.ones((1, *cell_shape, 1)) * measures[im].sel(record=ds.record).values.reshape(-1, *[1] * len(cell_shape), 1) * scale ** SCALING[im]
+        units = MEASURES[im][1]
+    else:
+        if records is None:
+            raise JaxrockInputError(f"im = {im!r}: a measure of each record and column; give the suite's records")
+        from .risk import _cells, _intensities
+
+        x1, units, power = _intensities(im, records, _cells(ds)[1])
+        x = x1[..., None] * scale**power
+    group = np.broadcast_to(np.arange(ds.sizes["record"])[:, None], (ds.sizes["record"], scale.size))
     fits = []
     for idx in np.ndindex(*cell_shape):
+        x_c = x[(slice(None), *idx)]
         o, st = over[(slice(None), *idx)], status[(slice(None), *idx)]
         ok = st == 0
         if not ok.any():
             fits.append(None)
             continue
-        f = fit_lognormal(x[ok], o[ok], group[ok], n_boot=n_boot, seed=seed)
+        f = fit_lognormal(x_c[ok], o[ok], group[ok], n_boot=n_boot, seed=seed)
         f["n_failed"] = int((~ok).sum())
         fits.append(f)
     blank = {"median": np.nan, "beta": np.nan, "median_ci": np.full(2, np.nan), "beta_ci": np.full(2, np.nan),
@@ -274,7 +284,7 @@ def suite_fragility(ds, measures, im: str = "pga", *, n_boot: int | None = None,
     fits = [f if f is not None else {**blank, "n_failed": int(over.shape[0] * over.shape[-1])} for f in fits]
     get = lambda key: np.array([f[key] for f in fits]).reshape(tuple(cell_shape) + np.shape(fits[0][key]))
     dims = tuple(d for d in ds.overturned.dims if d not in ("record", "scale"))
-    what = "scale factor" if im == "scale" else MEASURES[im][0]
+    what = "scale factor" if im == "scale" else MEASURES[im][0] if im in MEASURES else im
     out = xr.Dataset(
         {
             "median": (dims, get("median"), {"long_name": f"fragility median: {what} at 50 % probability of overturning", "units": units}),
@@ -345,7 +355,8 @@ def run_suite(models, records, *, scale, refine: int = 6, im: str = "pga", n_boo
             p = overturning_probability(sweep, ds, int(ensemble))
             ds["p_overturn"] = (sweep.dims, p, {"long_name": f"probability of overturning: the verdict, or where uncertain the fraction "
                                                              f"of {int(ensemble)} runs at the scale x (1 +- {PERTURBATION:g}) that overturn", "units": "1"})
-        frag = suite_fragility(ds, measures, im, n_boot=n_boot)
+        ds = ds.assign_coords({k: v for k, v in sweep.fixed.items()})  # the column's fixed quantities (a measure's tanα, T₁)
+        frag = suite_fragility(ds, measures, im, records=records, n_boot=n_boot)
         parts.append(xr.merge([ds, frag.rename({k: f"fragility_{k}" for k in frag.data_vars})], combine_attrs="override"))
     out = xr.concat(parts, dim=xr.DataArray(np.asarray(list(models), dtype=object), dims="model", name="model"),  # object: a Zarr v3 string
                     combine_attrs="drop_conflicts")

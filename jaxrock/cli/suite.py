@@ -31,7 +31,15 @@ def suite(
     scale: str = typer.Option("0.25:4:16", help="record factors of the sweep ('1,2,5' or 'a:b:n'): the fragility's observations, "
                               "and the brackets the least overturning factor is bisected in"),
     refine: int = typer.Option(5, help="bisections of each least overturning factor (resolution: the sweep's step / 2^refine)"),
-    im: str = typer.Option("pga", help="intensity measure of the fragility: pga [m/s2], pgv [m/s], pgd [m], arias [m/s], or scale"),
+    im: str = typer.Option("pga", help="intensity measures, comma-separated; the first is the fragility's and the hazard's: pga [m/s2], "
+                           "pgv [m/s], pgd [m], arias [m/s], cav [m/s], sa:T (Sa [m/s2] at T seconds, 5 % damping), sa:T1 (at the "
+                           "column's first period, eq. 21), pga_ratio (PGA/(g tanα)), pgv_ratio (PGV p/(g tanα)), or scale (the factor)"),
+    damage_states: str = typer.Option("1", help="damage states: increasing thresholds of max θ/α in (0, 1], 1 = overturning "
+                                      "(e.g. 0.1,0.5,1): a fragility per state and measure, the IDA curves and the measures' efficiency"),
+    hazard: Optional[str] = typer.Option(None, help="hazard curve of the first --im: a CSV of its value [SI units, or g with '[g]' in "
+                                         "the header] and annual rate of exceedance, or 'power:k0,k' (rate = k0 x^-k): each damage "
+                                         "state's mean annual frequency and probability in --years"),
+    years: float = typer.Option(50.0, help="exposure time of the damage states' probabilities [years], > 0"),
     boot: int = typer.Option(500, help="bootstrap resamplings of the records (the fragility's band)"),
     units: Optional[str] = typer.Option(None, help="acceleration units of two-column record files (default g)"),
     out: Path = typer.Option(Path("out/suite"), help="output folder: suite.zarr, least_scale.csv/.png, fragility.csv/.md/.png, "
@@ -53,7 +61,19 @@ def suite(
     kinds = [k.value for k in model]
     _check_refine(refine)
     _check_count("--boot", boot)
-    _check_im(im)
+    from ..analyses.risk import check_damage_states
+    from ..intensity import parse_ims
+
+    ims = parse_ims(im, allow_scale=True)
+    _check_im(ims[0])
+    states = check_damage_states(parse_values("--damage-states", damage_states))
+    if not (np.isfinite(years) and years > 0):
+        raise JaxrockInputError(f"--years = {years:g}; valid: a number > 0 (the exposure time)")
+    if hazard is not None and ims[0] == "scale":
+        raise JaxrockInputError("--hazard: the first --im is 'scale', which no hazard curve is given in; put a measure first")
+    from ..analyses.hazard import HazardCurve
+
+    curve = None if hazard is None else HazardCurve.parse(hazard)
     if not 0 <= ensemble <= MAX_ENSEMBLE:
         raise JaxrockInputError(f"--ensemble = {ensemble}; valid: an integer in [0, {MAX_ENSEMBLE}] (0: the verdicts as they are)")
     if ensemble and not sensitivity:
@@ -92,14 +112,20 @@ def suite(
 
     t0 = time.perf_counter()
     try:
-        ds = run_suite(kinds, recs, scale=sc, refine=refine, im=im, n_boot=boot, store_dir=out, progress=not quiet,
+        ds = run_suite(kinds, recs, scale=sc, refine=refine, im=ims[0], n_boot=boot, store_dir=out, progress=not quiet,
                        history=_history(), sensitivity=sensitivity, ensemble=ensemble, **given)
     except Interrupted:
         kept = ", ".join(f"{out / f'{k}.zarr'} ({zstore.kept_scenes(out / f'{k}.zarr'):,} runs)" for k in kinds if (out / f"{k}.zarr").is_dir())
         typer.echo(f"interrupted: the sweeps kept in {kept or 'no store yet'}; resume with: {_resume_command()}", err=True)
         raise typer.Exit(EXIT_INTERRUPTED) from None
+    from ..analyses.risk import risk_analysis
+    from ..reports import risk_files
+
+    risk = risk_analysis(ds, recs, damage_states=states, ims=[i for i in ims if i != "scale"] or ["pga"], hazard=curve, years=years,
+                         n_boot=boot)
     secs = time.perf_counter() - t0
     files = suite_files(ds, out, f"{len(recs)} records")
+    files.update(risk_files(risk, out, f"{len(recs)} records"))
     say(f"suite: {len(recs)} records × {len(kinds)} model(s) × {ds.sizes['scale']} factors"
                + "".join(f" × {len(v)} {k}" for k, v in given.items() if np.ndim(v)) + f" in {secs:.1f} s")
     say(f"{'record':<24}{'PGA [m/s2]':>11}{'PGV [m/s]':>11}{'D5-95 [s]':>11}")
@@ -107,6 +133,9 @@ def suite(
         one = ds.isel(record=r)
         say(f"{str(one.record.values)[:23]:<24}{float(one.pga):11.3f}{float(one.pgv):11.3f}{float(one.d5_95):11.2f}")
     say(Path(files["table"]).read_text(encoding="utf-8").split("\n\n")[1])
+    say(Path(files["efficiency"]).read_text(encoding="utf-8").split("\n\n")[1])
+    if curve is not None:
+        say(Path(files["risk"]).read_text(encoding="utf-8").split("\n\n")[1])
     say(uncertain_line(ds.least_scale_uncertain.values if sensitivity else None, ds.uncertain.values, "least factor(s)",
                               ds.least_scale.size))
     say("wrote " + ", ".join(str(p) for p in files.values()))
