@@ -247,9 +247,11 @@ def spectral_acceleration(record, periods, damping: float = 0.05) -> np.ndarray:
 
 # -- the intensity measures of a fragility (`--im`) ---------------------------------------------------
 IM_MEASURES = tuple(SCALING)  # the record measures an intensity can be (pgv_pga: power 0, no fragility's)
-IM_FORMS = ("pga, pgv, pgd, arias, cav, pgv_pga, sa:<T> (Sa at period T [s] > 0, ζ = 5 %, e.g. sa:0.5), "
+IM_FORMS = ("pga, pgv, pgd, arias, cav, pgv_pga, tp, omega_ratio, sa:<T> (Sa at period T [s] > 0, ζ = 5 %, e.g. sa:0.5), "
             "sa:T1 (Sa at the column's first period), pga_ratio (PGA/(g tanα)), pgv_ratio (PGV p/(g tanα))")
 _RATIOS = {  # name → (units, scaling power, the arguments it needs)
+    "tp": ("s", 0, ()),
+    "omega_ratio": ("1", 0, ("p",)),
     "pga_ratio": ("1", 1, ("tan_alpha",)),
     "pgv_ratio": ("1", 1, ("tan_alpha", "p")),
 }
@@ -260,7 +262,9 @@ def parse_im(spec: str) -> tuple[str, str, int, tuple[str, ...]]:
 
     The forms: a record measure (`IM_MEASURES`: `pga` [m/s²], `pgv` [m/s], `pgd` [m], `arias` [m/s],
     `cav` [m/s], and `pgv_pga` [s], which does not grow with the record: scaling power 0, no measure
-    to fit a fragility against, a check of sufficiency); `sa:<T>`, the pseudo-spectral acceleration [m/s²] at period T [s] (finite, > 0;
+    to fit a fragility against, a check of sufficiency); `tp` [s], the record's pulse period
+    (`pulse_period`), and `omega_ratio` = 2π/(Tp p) [–] (needs `p`), the paper's ω_p/p for a record,
+    both of scaling power 0; `sa:<T>`, the pseudo-spectral acceleration [m/s²] at period T [s] (finite, > 0;
     ζ = 5 %; `spectral_acceleration`); `sa:T1`, Sa at the column's first period (needs `period`);
     `pga_ratio` = PGA / (g tanα) [–] (needs `tan_alpha`) and `pgv_ratio` = PGV p / (g tanα) [–] (needs
     `tan_alpha` and `p`), the rocking block's dimensionless intensities. Case and surrounding blanks
@@ -418,7 +422,10 @@ def intensity_of(spec: str, records, *, period=None, tan_alpha=None, p=None) -> 
     measures = [record_measures(record) for record in records]
     if name in _RATIOS:
         from .geometry import G
-    if name == "pga_ratio":
+    if name in ("tp", "omega_ratio"):
+        tp = np.array([pulse_period(record) for record in records])[lead]
+        values = tp if name == "tp" else 2 * np.pi / tp / pp
+    elif name == "pga_ratio":
         values = np.array([m["pga"] for m in measures])[lead] / (G * ta)
     elif name == "pgv_ratio":
         values = np.array([m["pgv"] for m in measures])[lead] * pp / (G * ta)
@@ -427,5 +434,41 @@ def intensity_of(spec: str, records, *, period=None, tan_alpha=None, p=None) -> 
     return np.broadcast_to(values, shape).astype(float, copy=True)
 
 
-__all__ = ["IM_FORMS", "IM_MEASURES", "MEASURES", "SCALING", "intensity_of", "parse_im", "parse_ims",
+PULSE_PERIODS = np.geomspace(0.05, 10.0, 160)  # the search grid of `pulse_period` [s]
+
+
+def pulse_period(record, damping: float = 0.05) -> float:
+    """The record's predominant pulse period Tp [s]: the period of the peak of its pseudo-velocity
+    spectrum PSV(T) = Sa(T) T/2π (ζ = 5 %; Alavi and Krawinkler 2004, Mavroeidis and Papageorgiou
+    2003 relate it to the period of a near-fault velocity pulse), on a grid of 160 periods from
+    0.05 to 10 s refined by a parabola through the peak and its neighbours in ln T. Not a wavelet fit
+    of the velocity pulse (Baker 2007): on a record without a pulse it is the period where the
+    record's velocity spectrum peaks. With the column's p it gives the rocking block's frequency
+    ratio ω_p/p = 2π/(Tp p) of the paper's spectra (`omega_ratio`), which does not grow with the
+    record (scaling power 0).
+
+    Arguments:
+        record (Record): the ground-motion record.
+        damping (float): the oscillators' damping ratio ζ, in [0, 1); default 0.05.
+
+    Returns:
+        Tp [s].
+
+    Example:
+        ```python
+        import jaxrock
+        from jaxrock.intensity import pulse_period
+        pulse_period(jaxrock.el_centro())
+        ```
+    """
+    T = PULSE_PERIODS
+    lv = np.log(spectral_acceleration(record, T, damping) * T)
+    k = int(np.clip(np.argmax(lv), 1, T.size - 2))
+    x, y = np.log(T[k - 1:k + 2]), lv[k - 1:k + 2]
+    curv = y[0] - 2 * y[1] + y[2]
+    shift = 0.5 * (y[0] - y[2]) / curv if curv < 0 else 0.0
+    return float(np.exp(x[1] + np.clip(shift, -1.0, 1.0) * (x[2] - x[1])))
+
+
+__all__ = ["PULSE_PERIODS", "pulse_period", "IM_FORMS", "IM_MEASURES", "MEASURES", "SCALING", "intensity_of", "parse_im", "parse_ims",
            "record_measures", "spectral_acceleration", "suite_measures"]

@@ -356,7 +356,8 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
             if np.isfinite(bi):
                 best.setdefault(str(mod), []).append((bi, spec))
     note = ("Efficiency: the dispersion β of each measure's overturning fit (median over the columns); the smaller, the more "
-            "efficient. Sufficiency: the slope of ln(collapse intensity / median) against ln(PGV/PGA) over the records; "
+            "efficient. Sufficiency: the slope of ln(collapse intensity / median) against ln(ω_p/p) over the records (ω_p = 2π/Tp, "
+            "Tp the peak of the record's velocity spectrum); "
             "a sufficient measure leaves none (p large). Most efficient (truncated IDA): "
             + (", ".join(f"{k}: " + " = ".join(sp for b, sp in v if b <= min(v)[0] * (1 + 1e-9)) for k, v in best.items()) or "none fitted")
             + " (measures proportional to each other on a column, PGA and PGA/(g tanα), tie).")

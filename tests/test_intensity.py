@@ -227,3 +227,30 @@ def test_intensity_of_sa_once_per_record_for_its_unique_periods(monkeypatch):
         intensity_of("sa:T1", recs)
     with pytest.raises(JaxrockInputError, match="period"):
         intensity_of("sa:T1", recs, period=[0.5, 0.0])
+
+
+@pytest.mark.parametrize("tg", [0.4, 1.2, 3.0])
+def test_pulse_period_of_a_harmonic_motion_is_its_velocity_resonance(tg):
+    """Under a long harmonic üg of period Tg the pseudo-velocity spectrum is the steady state's,
+    PSV(T) = A/ω / sqrt((1 − r²)² + (2ζr)²), r = Tg/T... written from the SDOF's closed form: its
+    peak (found here by scipy) is Tp; `pulse_period` finds it on its grid refined by a parabola,
+    within 0.2 %; ω_p/p follows from it."""
+    from scipy.optimize import minimize_scalar
+
+    from jaxrock.intensity import intensity_of, pulse_period
+
+    dt, zeta = min(0.01, tg / 100), 0.05
+    rec = jr.Record(_ramped_sine(1.0, tg, dt, n_ramp=20, n_steady=40), dt)
+    W = 2 * np.pi / tg
+
+    def psv(T):  # the steady-state amplitude of u under sin(W t), times ω
+        w = 2 * np.pi / T
+        return w / np.sqrt((w**2 - W**2) ** 2 + (2 * zeta * w * W) ** 2)
+
+    ref = minimize_scalar(lambda lt: -psv(np.exp(lt)), bounds=(np.log(tg / 2), np.log(2 * tg)), method="bounded",
+                          options={"xatol": 1e-10}).x
+    tp = pulse_period(rec)
+    assert tp == pytest.approx(np.exp(ref), rel=2e-3)  # measured 8e-4 … 1.0e-3
+    p = np.array([1.5, 3.0])
+    np.testing.assert_allclose(intensity_of("omega_ratio", [rec], p=p)[0], 2 * np.pi / tp / p, rtol=1e-12)
+    assert intensity_of("tp", [rec.scaled(3.0)])[0] == pytest.approx(tp, rel=1e-9)  # scaling power 0

@@ -22,8 +22,10 @@ no new run:
   or the column's first period T₁ (eq. 21, the column's material), and the rocking-specific
   PGA/(g tanα) and PGV·p/(g tanα). Their **efficiency** is the dispersion β of each fit (the
   smaller, the fewer records a given confidence needs; Luco and Cornell 2007), their
-  **sufficiency** the slope of the collapse intensities' residuals against ln(PGV/PGA), a proxy of
-  the record's pulse period, with its p-value (a sufficient measure leaves no trend).
+  **sufficiency** the slope of the collapse intensities' residuals against ln(ω_p/p), the paper's
+  frequency ratio with the record's pulse period Tp (`jaxrock.intensity.pulse_period`, ω_p = 2π/Tp),
+  with its p-value (a sufficient measure leaves no trend: rocking overturning depends strongly on
+  ω_p/p, so PGA is not expected to be sufficient).
 - **Hazard** (`jaxrock.analyses.hazard`): the mean annual frequency of each damage state,
   λ_DS = ∫ P(DS | x) |dλ/dx| dx, for the first intensity measure, with the bootstrap band (each
   bootstrap fit integrated alike), the probability 1 − exp(−λ_DS T) in T years, and the
@@ -63,17 +65,23 @@ def _cells(ds):
                   "E": get("E", concrete.E), "rho": get("rho", concrete.rho)}
 
 
+def _frequency(cells):
+    """The columns' frequency parameter p = sqrt(3g/(4R)) [rad/s] (`jaxrock.Block.p`)."""
+    from ..geometry import G
+
+    R = 0.5 * cells["height"] * np.sqrt(1.0 + cells["tan_alpha"] ** 2)
+    return np.sqrt(3.0 * G / (4.0 * R))
+
+
 def _intensities(spec, records, cells):
     """x of every record × cell for a factor of 1 (n_records, *cells) and its scaling power."""
-    from ..geometry import G
     from ..intensity import intensity_of, parse_im
     from ..spring import first_period_eq21
 
     name, units, power, _ = parse_im(spec)
     ta, h = cells["tan_alpha"], cells["height"]
     period = np.asarray(first_period_eq21(h, ta, cells["E"], cells["rho"]))
-    R = 0.5 * h * np.sqrt(1.0 + ta**2)
-    p = np.sqrt(3.0 * G / (4.0 * R))  # the column's frequency parameter (jaxrock.Block.p)
+    p = _frequency(cells)
     x = np.broadcast_to(intensity_of(spec, records, period=period, tan_alpha=ta, p=p), (len(records), *ta.shape))
     return np.asarray(x, dtype=float), units, power
 
@@ -107,7 +115,7 @@ def ida_curves(edp, x, grid_size: int = IDA_GRID):
 
 
 def _sufficiency(capacity, proxy, median):
-    """Slope and p-value of ln(capacity/median) against ln(proxy) over the collapsed records."""
+    """Slope and p-value of ln(capacity/median) against ln(proxy) (ω_p/p) over the collapsed records."""
     from scipy.stats import linregress
 
     ok = np.isfinite(capacity) & np.isfinite(proxy) & (proxy > 0)
@@ -182,7 +190,7 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
     group = np.broadcast_to(np.arange(n_rec)[:, None], (n_rec, scale.size))
     from ..intensity import intensity_of
 
-    proxy = np.asarray(intensity_of("pgv_pga", records), dtype=float).reshape(n_rec)
+    proxy = np.asarray(intensity_of("omega_ratio", records, p=_frequency(cells)), dtype=float)  # (record, *cells): ω_p/p
     S, I = len(states), len(ims)
     med = np.full((len(models), *shape, S, I), np.nan)
     beta, med_ci, beta_ci = med.copy(), np.full(med.shape + (2,), np.nan), np.full(med.shape + (2,), np.nan)
@@ -215,7 +223,7 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
                 if np.isfinite(cap).any():
                     t = fit_truncated_ida(cap, top, n_boot=n_boot, seed=seed)
                     ida_med[(m, *c, i)], ida_beta[(m, *c, i)], ida_med_ci[(m, *c, i)] = t["median"], t["beta"], t["median_ci"]
-                    suff_slope[(m, *c, i)], suff_p[(m, *c, i)] = _sufficiency(cap, proxy, t["median"])
+                    suff_slope[(m, *c, i)], suff_p[(m, *c, i)] = _sufficiency(cap, proxy[(slice(None), *c)], t["median"])
     # the family's curves cross where a lower state's probability falls below a higher one's
     lo_x, hi_x = ida_im.reshape(I, -1).min(1), ida_im.reshape(I, -1).max(1)
     grid = np.exp(np.linspace(np.log(lo_x), np.log(hi_x), 200))  # (200, I)
@@ -245,7 +253,7 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
             "ida_median": ((*lead, "im"), ida_med, {"long_name": "truncated-IDA fit: median collapse intensity (Baker 2015)"}),
             "ida_median_ci": ((*lead, "im", "bound"), ida_med_ci, {"long_name": "bootstrap 5-95 % interval of ida_median"}),
             "ida_beta": ((*lead, "im"), ida_beta, {"long_name": "truncated-IDA fit: record-to-record dispersion", "units": "1"}),
-            "sufficiency_slope": ((*lead, "im"), suff_slope, {"long_name": "slope of ln(collapse im / ida_median) against ln(PGV/PGA)"}),
+            "sufficiency_slope": ((*lead, "im"), suff_slope, {"long_name": "slope of ln(collapse im / ida_median) against ln(omega_p/p)"}),
             "sufficiency_p": ((*lead, "im"), suff_p, {"long_name": "p-value of sufficiency_slope (small: the measure is not sufficient)"}),
             "ida_im": (("im", "record", *cell_dims, "scale"), ida_im, {"long_name": "each run's intensity s^k IM(record)"}),
             "ida_edp": (("model", "record", *cell_dims, "scale"), edp, {
