@@ -318,13 +318,14 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
                             f"LS{s + 1}-Theta_1": float(f.ds_beta)}
                 pel.append(row)
             f = one.isel(im=i, damage_state=-1)
-            eff.append({**head, "im": spec, "im_units": units[i], "beta": float(f.ds_beta), "ida_median": float(one.ida_median[i]),
-                        "ida_beta": float(one.ida_beta[i]), "sufficiency_slope": float(one.sufficiency_slope[i]),
+            eff.append({**head, "im": spec, "im_units": units[i], "beta": float(f.ds_beta), "separated": int(float(f.ds_beta) == BETA_MIN),
+                        "ida_median": float(one.ida_median[i]), "ida_beta": float(one.ida_beta[i]),
+                        "ida_n_collapsed": int(one.ida_n_collapsed[i]), "sufficiency_slope": float(one.sufficiency_slope[i]),
                         "sufficiency_p": float(one.sufficiency_p[i])})
         if "maf" in risk:
             for s, d in enumerate(states):
                 lam = float(one.maf[s])
-                maf.append({**head, "im": ims[0], "damage_state": float(d), "maf": lam, "maf_16": float(one.maf_band[s, 0]),
+                maf.append({**head, "im": ims[0], "damage_state": float(d), "separated": int(float(one.ds_beta[s, 0]) == BETA_MIN), "maf": lam, "maf_16": float(one.maf_band[s, 0]),
                             "maf_84": float(one.maf_band[s, 1]), "return_period": 1.0 / lam if lam > 0 else float("inf"),
                             f"p_{risk.attrs['years']:g}_years": float(one.p_years[s])})
     files["damage_states"] = write_table(out / "damage_states.csv", rows)
@@ -347,7 +348,8 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
     best = {}
     for mod in risk.model.values:
         for spec in ims:
-            mine = [e for e in eff if e["model"] == str(mod) and e["im"] == spec]
+            # a column whose outcomes one intensity separates, or with fewer than 3 overturning records, has no dispersion to compare
+            mine = [e for e in eff if e["model"] == str(mod) and e["im"] == spec and not e["separated"] and e["ida_n_collapsed"] >= 3]
             b = np.nanmedian([e["beta"] for e in mine]) if any(np.isfinite(e["beta"]) for e in mine) else np.nan
             bi = np.nanmedian([e["ida_beta"] for e in mine]) if any(np.isfinite(e["ida_beta"]) for e in mine) else np.nan
             sl = np.nanmedian([e["sufficiency_slope"] for e in mine]) if any(np.isfinite(e["sufficiency_slope"]) for e in mine) else np.nan
@@ -355,7 +357,8 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
             md.append(f"| {mod} | {spec} | {b:.3f} | {bi:.3f} | {sl:.3f} ({pv:.2g}) |")
             if np.isfinite(bi):
                 best.setdefault(str(mod), []).append((bi, spec))
-    note = ("Efficiency: the dispersion β of each measure's overturning fit (median over the columns); the smaller, the more "
+    note = ("Efficiency: the dispersion β of each measure's overturning fit (median over the columns with at least 3 overturning "
+            "records and outcomes no intensity separates); the smaller, the more "
             "efficient. Sufficiency: the slope of ln(collapse intensity / median) against ln(ω_p/p) over the records (ω_p = 2π/Tp, "
             "Tp the peak of the record's velocity spectrum); "
             "a sufficient measure leaves none (p large). Most efficient (truncated IDA): "
@@ -372,11 +375,14 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
         md = [f"| model | {' | '.join(cells)} | damage state | MAF [1/yr] | 16–84 % | return period [yr] | P in {years:g} yr |",
               "|" + "---|" * (6 + len(cells))]
         for r in maf:
-            md.append("| " + " | ".join([r["model"], *(f"{r[d]:g}" for d in cells), f"{r['damage_state']:g}", f"{r['maf']:.3g}",
+            md.append("| " + " | ".join([r["model"], *(f"{r[d]:g}" for d in cells), f"{r['damage_state']:g}",
+                                         f"{r['maf']:.3g}" + (" †" if r["separated"] else ""),
                                          f"{r['maf_16']:.3g}–{r['maf_84']:.3g}", f"{r['return_period']:.4g}",
                                          f"{r[f'p_{years:g}_years']:.3g}"]) + " |")
         note = (f"Mean annual frequency λ = ∫ P(DS | x) |dλ/dx| dx of each damage state (max θ/α ≥ the state; 1: overturning) "
-                f"against {ims[0]}, hazard {risk.attrs['hazard']}; band: bootstrap over records; P = 1 − exp(−λ T).")
+                f"against {ims[0]}, hazard {risk.attrs['hazard']}; band: bootstrap over records; P = 1 − exp(−λ T). † one "
+                f"intensity separates the state's outcomes (β = {BETA_MIN:g}: a step, its band degenerate): too few runs reach "
+                "it to fit a dispersion; widen --scale.")
         text = f"# {title}: risk\n\n" + "\n".join(md) + f"\n\n{note}\n"
         files["risk"] = write_output(out / "risk.md", lambda tmp: Path(tmp).write_text(text, encoding="utf-8"), text_head(text))
         plt.close(plot_deaggregation(risk, path=out / "deaggregation.png", title=f"{title}: deaggregation over {ims[0]}"))

@@ -199,6 +199,7 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
     n_hit = np.zeros(med.shape)
     ida_med, ida_beta = np.full((len(models), *shape, I), np.nan), np.full((len(models), *shape, I), np.nan)
     ida_med_ci = np.full((len(models), *shape, I, 2), np.nan)
+    ida_n = np.zeros((len(models), *shape, I), dtype=np.int32)
     suff_slope, suff_p = ida_med.copy(), ida_med.copy()
     ida_im = np.zeros((I, n_rec, *shape, scale.size))
     units = []
@@ -223,6 +224,7 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
                 if np.isfinite(cap).any():
                     t = fit_truncated_ida(cap, top, n_boot=n_boot, seed=seed)
                     ida_med[(m, *c, i)], ida_beta[(m, *c, i)], ida_med_ci[(m, *c, i)] = t["median"], t["beta"], t["median_ci"]
+                    ida_n[(m, *c, i)] = t["n_overturned"]
                     suff_slope[(m, *c, i)], suff_p[(m, *c, i)] = _sufficiency(cap, proxy[(slice(None), *c)], t["median"])
     # the family's curves cross where a lower state's probability falls below a higher one's
     lo_x, hi_x = ida_im.reshape(I, -1).min(1), ida_im.reshape(I, -1).max(1)
@@ -252,6 +254,7 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
                 "long_name": "this state's curve falls below the next state's somewhere within the suite's intensities"}),
             "ida_median": ((*lead, "im"), ida_med, {"long_name": "truncated-IDA fit: median collapse intensity (Baker 2015)"}),
             "ida_median_ci": ((*lead, "im", "bound"), ida_med_ci, {"long_name": "bootstrap 5-95 % interval of ida_median"}),
+            "ida_n_collapsed": ((*lead, "im"), ida_n, {"long_name": "records that overturned within the sweep (the others censored)"}),
             "ida_beta": ((*lead, "im"), ida_beta, {"long_name": "truncated-IDA fit: record-to-record dispersion", "units": "1"}),
             "sufficiency_slope": ((*lead, "im"), suff_slope, {"long_name": "slope of ln(collapse im / ida_median) against ln(omega_p/p)"}),
             "sufficiency_p": ((*lead, "im"), suff_p, {"long_name": "p-value of sufficiency_slope (small: the measure is not sufficient)"}),
