@@ -295,7 +295,7 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
             "long_name": "share of the damage state's mean annual frequency per unit ln x: P(DS|x) |dλ/dx| x / maf", "units": "1"})
         out = out.assign_coords(band=("band", np.asarray(BAND), {"units": "percent"}),
                                 hazard_im=("hazard_im", xg, {"long_name": ims[0], "units": units[0]}))
-        out.attrs.update({"years": float(years), "hazard": str(hazard)})
+        out.attrs.update({"years": float(years), "hazard": f"a curve of {hazard.im.size} points from {hazard.im[0]:.4g} to {hazard.im[-1]:.4g} {units[0]}"})
     return out
 
 

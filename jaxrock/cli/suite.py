@@ -123,6 +123,8 @@ def suite(
 
     risk = risk_analysis(ds, recs, damage_states=states, ims=[i for i in ims if i != "scale"] or ["pga"], hazard=curve, years=years,
                          n_boot=boot)
+    if hazard is not None:
+        risk.attrs["hazard"] = hazard  # as the user gave it: the file, or power:k0,k
     secs = time.perf_counter() - t0
     files = suite_files(ds, out, f"{len(recs)} records")
     files.update(risk_files(risk, out, f"{len(recs)} records"))
