@@ -143,7 +143,23 @@ def suite(
     say("wrote " + ", ".join(str(p) for p in files.values()))
     report("suite", {"models": kinds, "records": [{"record": str(ds.record.values[r]), "pga": float(ds.pga[r]), "pgv": float(ds.pgv[r]),
                                                     "d5_95": float(ds.d5_95[r])} for r in range(ds.sizes["record"])],
-                     "fragility": fragility_rows(ds),
+                     "fragility": fragility_rows(ds), "damage_states": _table_rows(files["damage_states"]),
+                     "efficiency": _table_rows(files["efficiency_csv"]),
+                     **({"risk": _table_rows(files["risk_csv"])} if "risk_csv" in files else {}),
                      "status": _status_counts(ds.worst_status.values), "seconds": secs, "files": list(files.values())},
            {"pga": "m/s2", "pgv": "m/s", "d5_95": "s", "seconds": "s"})
     _exit_if_untrusted(_status_counts(ds.worst_status.values), "column(s) × record(s)")
+
+
+def _table_rows(path) -> list[dict]:
+    """The rows of a table this command wrote (numbers as numbers), for --json."""
+    import csv
+
+    def value(v):
+        try:
+            return float(v)
+        except ValueError:
+            return v
+
+    with open(path, encoding="utf-8") as fh:
+        return [{k: value(v) for k, v in row.items()} for row in csv.DictReader(line for line in fh if not line.startswith("#"))]
