@@ -286,7 +286,7 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
     states' fragilities `damage_states.csv` and `damage_states.png`, their pelicun fragility table
     `pelicun_fragility.csv` (pelicun's columns: Demand-Type, Demand-Unit, LSk-Family, LSk-Theta_0 the
     median, LSk-Theta_1 the dispersion; one row per model × column × measure pelicun names: PGA, PGV,
-    Sa), the IDA curves `ida.csv` and `ida.png`, the measures' efficiency and sufficiency
+    Sa), the IDA curves `ida.csv` and `ida.png` and their median and 16/84 % curves `ida_fractiles.csv`, the measures' efficiency and sufficiency
     `efficiency.csv` and `efficiency.md`, and with a hazard the mean annual frequencies `risk.csv`,
     `risk.md` and the deaggregation `deaggregation.png`."""
     from .plotting import plot_damage_states, plot_deaggregation, plot_ida
@@ -342,6 +342,17 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
                             "max_theta": float(one.ida_edp[r, k]), "resurrections": int(one.windows[r])})
     files["ida"] = write_table(out / "ida.csv", ida, footer="max_theta: max θ/α of the run, 1 from overturning on; resurrections: "
                                "the record's turns from overturned back to standing as the factor grows")
+    from .analyses.risk import ida_curves
+
+    fractiles = []
+    for m, sel, head in _cell_rows(risk):
+        one = risk.isel(model=m, **sel)
+        grid, (p16, p50, p84) = ida_curves(one.ida_edp.transpose("record", "scale").values,
+                                           one.ida_im.isel(im=0).transpose("record", "scale").values)
+        fractiles += [{**head, ims[0]: float(x), "max_theta_16": float(a), "max_theta_50": float(b), "max_theta_84": float(c)}
+                      for x, a, b, c in zip(grid, p16, p50, p84)]
+    files["ida_fractiles"] = write_table(out / "ida_fractiles.csv", fractiles, footer="percentiles of max θ/α over the records at each "
+                                         "intensity (each record's curve interpolated in ln x within its own range)")
     files["efficiency_csv"] = write_table(out / "efficiency.csv", eff)
     # the summary: per model and measure, the median over the columns of each dispersion
     md = ["| model | measure | β (overturning, stripes) | β (truncated IDA) | sufficiency slope (p) |", "|---|---|---|---|---|"]

@@ -139,7 +139,7 @@ def test_suite_command_writes_fragility_family_ida_and_risk(tmp_path):
     r = invoke("suite", "builtin", "--model", "rigid", "--height", "2,4", "--scale", "0.25:6:8", "--refine", "2", "--boot", "40",
                "--damage-states", "0.1,0.5,1", "--im", "sa:T1,pgv", "--hazard", hz, "--out", out, "-q")
     assert r.exit_code == 0, r.output
-    for name in ("damage_states.csv", "damage_states.png", "pelicun_fragility.csv", "ida.csv", "ida.png", "efficiency.csv",
+    for name in ("damage_states.csv", "damage_states.png", "pelicun_fragility.csv", "ida.csv", "ida.png", "ida_fractiles.csv", "efficiency.csv",
                  "efficiency.md", "risk.csv", "risk.md", "deaggregation.png"):
         assert (out / name).is_file(), name
     rows = read_csv(out / "damage_states.csv")
