@@ -267,7 +267,7 @@ def _cell_rows(risk):
             yield m, dict(zip(cells, idx)), {"model": str(risk.model.values[m]), **fixed, **{d: float(risk[d][i]) for d, i in zip(cells, idx)}}
 
 
-def _pelicun_demand(spec: str, units: str, T1: float):
+def _pelicun_demand(spec: str, T1: float):
     """pelicun's demand type and unit of an intensity measure, and the factor from jaxrock's SI
     value; None for a measure pelicun has no demand type for."""
     from .geometry import G
@@ -290,7 +290,6 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
     `efficiency.csv` and `efficiency.md`, and with a hazard the mean annual frequencies `risk.csv`,
     `risk.md` and the deaggregation `deaggregation.png`."""
     from .plotting import plot_damage_states, plot_deaggregation, plot_ida
-    from .spring import Column, first_period_eq21
 
     out = Path(out)
     files = {}
@@ -306,8 +305,7 @@ def risk_files(risk, out: Path, title: str) -> dict[str, Path]:
                              "median_5": float(f.ds_median_ci[0]), "median_95": float(f.ds_median_ci[1]), "beta": float(f.ds_beta),
                              "beta_5": float(f.ds_beta_ci[0]), "beta_95": float(f.ds_beta_ci[1]), "n": int(f.ds_n),
                              "n_reached": _count(f.ds_n_reached), "crosses_next": int(f.crosses)})
-            T1 = float(first_period_eq21(head.get("height", np.nan), head.get("tan_alpha", np.nan), Column.concrete().E, Column.concrete().rho))
-            demand = _pelicun_demand(spec, units[i], T1)
+            demand = _pelicun_demand(spec, float(one.column_period))
             if demand is not None and np.isfinite(one.ds_median.isel(im=i).values).all():
                 name, unit, factor = demand
                 ident = ".".join([head["model"], *(f"{k}={v:g}" for k, v in head.items() if k != "model")])

@@ -52,37 +52,31 @@ def check_damage_states(states) -> np.ndarray:
 
 
 def _cells(ds):
-    """The suite's column cells: their dims and, broadcast over them, tanα, 2h, E and ρ."""
+    """The suite's column cells: their dims and, broadcast over them, tanα, 2h, E, ρ, the first
+    fixed-base period T₁ (eq. 21) and the frequency parameter p (`jaxrock.Block.p`)."""
     import xarray as xr
 
-    from ..spring import Column
+    from ..geometry import Block
+    from ..spring import Column, first_period_eq21
 
     template = ds.least_scale.isel({d: 0 for d in ("model", "record") if d in ds.least_scale.dims}, drop=True)
     dims = list(template.dims)
     concrete = Column.concrete()
     get = lambda name, default: xr.broadcast(ds[name] if name in ds else xr.DataArray(float(default)), template)[0].values.astype(float)
-    return dims, {"tan_alpha": get("tan_alpha", np.nan), "height": get("height", np.nan),
-                  "E": get("E", concrete.E), "rho": get("rho", concrete.rho)}
-
-
-def _frequency(cells):
-    """The columns' frequency parameter p = sqrt(3g/(4R)) [rad/s] (`jaxrock.Block.p`)."""
-    from ..geometry import G
-
-    R = 0.5 * cells["height"] * np.sqrt(1.0 + cells["tan_alpha"] ** 2)
-    return np.sqrt(3.0 * G / (4.0 * R))
+    cells = {"tan_alpha": get("tan_alpha", np.nan), "height": get("height", np.nan), "E": get("E", concrete.E),
+             "rho": get("rho", concrete.rho)}
+    cells["period"] = np.asarray(first_period_eq21(cells["height"], cells["tan_alpha"], cells["E"], cells["rho"]))
+    cells["p"] = np.asarray(Block.from_slenderness(cells["height"], cells["tan_alpha"]).p)
+    return dims, cells
 
 
 def _intensities(spec, records, cells):
     """x of every record × cell for a factor of 1 (n_records, *cells) and its scaling power."""
     from ..intensity import intensity_of, parse_im
-    from ..spring import first_period_eq21
 
     name, units, power, _ = parse_im(spec)
-    ta, h = cells["tan_alpha"], cells["height"]
-    period = np.asarray(first_period_eq21(h, ta, cells["E"], cells["rho"]))
-    p = _frequency(cells)
-    x = np.broadcast_to(intensity_of(spec, records, period=period, tan_alpha=ta, p=p), (len(records), *ta.shape))
+    ta = cells["tan_alpha"]
+    x = np.broadcast_to(intensity_of(spec, records, period=cells["period"], tan_alpha=ta, p=cells["p"]), (len(records), *ta.shape))
     return np.asarray(x, dtype=float), units, power
 
 
@@ -190,7 +184,7 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
     group = np.broadcast_to(np.arange(n_rec)[:, None], (n_rec, scale.size))
     from ..intensity import intensity_of
 
-    proxy = np.asarray(intensity_of("omega_ratio", records, p=_frequency(cells)), dtype=float)  # (record, *cells): ω_p/p
+    proxy = np.asarray(intensity_of("omega_ratio", records, p=cells["p"]), dtype=float)  # (record, *cells): ω_p/p
     S, I = len(states), len(ims)
     med = np.full((len(models), *shape, S, I), np.nan)
     beta, med_ci, beta_ci = med.copy(), np.full(med.shape + (2,), np.nan), np.full(med.shape + (2,), np.nan)
@@ -258,6 +252,8 @@ def risk_analysis(ds, records, *, damage_states=(1.0,), ims=("pga",), hazard=Non
             "ida_beta": ((*lead, "im"), ida_beta, {"long_name": "truncated-IDA fit: record-to-record dispersion", "units": "1"}),
             "sufficiency_slope": ((*lead, "im"), suff_slope, {"long_name": "slope of ln(collapse im / ida_median) against ln(omega_p/p)"}),
             "sufficiency_p": ((*lead, "im"), suff_p, {"long_name": "p-value of sufficiency_slope (small: the measure is not sufficient)"}),
+            "column_period": (tuple(cell_dims), cells["period"], {"long_name": "column's first fixed-base period T1 (eq. 21): sa:T1's",
+                                                                  "units": "s"}),
             "ida_im": (("im", "record", *cell_dims, "scale"), ida_im, {"long_name": "each run's intensity s^k IM(record)"}),
             "ida_edp": (("model", "record", *cell_dims, "scale"), edp, {
                 "long_name": "max theta/alpha of each run, 1 from overturning on (flat-lining)", "units": "1"}),
