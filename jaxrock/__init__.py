@@ -48,6 +48,7 @@ _EXPORTS = {
     **dict.fromkeys(["fit_lognormal", "fit_truncated_ida"], "analyses.fragility"),
     **dict.fromkeys(["HazardCurve", "mean_annual_frequency", "probability_in_years"], "analyses.hazard"),
     "risk_analysis": "analyses.risk",
+    **dict.fromkeys(["identify", "Measured", "Identification", "eta_from_peaks"], "analyses.identify"),
     "run_suite": "analyses.suite",
     **dict.fromkeys(["Spectrum", "RecordSpectrum", "overturning_spectrum", "record_overturning_scale", "refine_boundaries", "run_batch",
                      "run_scenes", "energy_ratio", "energy_ratio_grid", "calibrate_cbar", "CalibrationResult", "fit_power_law",
@@ -101,6 +102,9 @@ if _TYPE_CHECKING:  # the same names, explicitly, for static tools (type checker
         HazardCurve as HazardCurve, mean_annual_frequency as mean_annual_frequency, probability_in_years as probability_in_years,
     )
     from .analyses.risk import risk_analysis as risk_analysis
+    from .analyses.identify import (
+        identify as identify, Measured as Measured, Identification as Identification, eta_from_peaks as eta_from_peaks,
+    )
     from .analyses.suite import run_suite as run_suite
     from .analyses import (
         Spectrum as Spectrum, RecordSpectrum as RecordSpectrum, overturning_spectrum as overturning_spectrum,

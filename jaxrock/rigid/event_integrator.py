@@ -219,6 +219,9 @@ class RigidStepper(AbstractStepper):
     integrator: EventIntegrator
     save: Save | None
     t1: Array | None
+    # (t0, θ0, θ̇0): a history run from this state at t0 instead of rest at the excitation's start
+    # (`jaxrock.analyses.identify`: free rocking from a release, a segment from a measured peak)
+    start: tuple[Array, Array, Array] | None = None
 
     @property
     def max_steps(self) -> int:
@@ -262,7 +265,7 @@ class RigidStepper(AbstractStepper):
 
     def _paced(self, exc: AbstractExcitation) -> bool:
         """Whether a run goes sample by sample (module docstring): summaries on a sampled record."""
-        return self.summary_only and isinstance(exc, SampledRecord)
+        return self.summary_only and isinstance(exc, SampledRecord) and self.start is None
 
     def init(self, exc: AbstractExcitation) -> _Carry | _Paced:
         c = self._init(exc)
@@ -281,13 +284,16 @@ class RigidStepper(AbstractStepper):
         zero = jnp.zeros((), dtype)
         save = self.save
         hist0 = None if save is None else {k: jnp.zeros_like(save.ts) for k in save.fields}
+        t0, theta0, theta_dot0 = (exc.t_start, zero, zero) if self.start is None else self.start
+        t0, theta0, theta_dot0 = (jnp.asarray(v, dtype) for v in (t0, theta0, theta_dot0))
+        moving = (theta0 != 0) | (theta_dot0 != 0)
         return _Carry(
-            t=jnp.asarray(exc.t_start, dtype),
-            theta=zero,
-            theta_dot=zero,
-            side=jnp.ones((), dtype),
-            mode=jnp.asarray(_REST),
-            rec=Record.start(),
+            t=t0,
+            theta=theta0,
+            theta_dot=theta_dot0,
+            side=jnp.where(theta0 != 0, jnp.sign(theta0), jnp.where(theta_dot0 < 0, -1.0, 1.0)).astype(dtype),
+            mode=jnp.where(moving, jnp.asarray(_ROCKING), jnp.asarray(_REST)),
+            rec=Record.start().saw_uplift(moving, t0),
             n_impacts=jnp.zeros((), jnp.int32),
             n_segments=jnp.zeros((), jnp.int32),
             dt_next=zero,
