@@ -631,3 +631,67 @@ def plot_deaggregation(risk, *, path=None, title=None):
 
 
 __all__ += ["plot_damage_states", "plot_ida", "plot_deaggregation"]
+
+
+def plot_identification(result, path=None, *, title=None):
+    """An identification (`jaxrock.identify`): the measured θ/α′ as dots and the fitted model's as
+    lines, one per segment (each starts at a measured peak, marked), the residuals θ_model − θ_measured
+    below with ± the estimated noise, and, where there are bootstrap estimates, one histogram per
+    parameter with its estimate and 95 % interval."""
+    seg = result.segments
+    alpha = float(result.model.block.alpha_r)
+    mask = np.asarray(seg.mask, dtype=bool)
+    real = mask.any(axis=1)
+    boot = np.asarray(result.bootstrap, dtype=float)
+    P = len(result.free)
+    has_boot = boot.ndim == 2 and boot.shape[0] > 0
+    rows = [3.0, 1.4] + ([1.6] if has_boot else [])
+    fig = plt.figure(figsize=(7.5, 1.3 * sum(rows) + 0.6), constrained_layout=True)
+    grid = fig.add_gridspec(len(rows), max(P, 1), height_ratios=rows)
+    ax = fig.add_subplot(grid[0, :])
+    axr = fig.add_subplot(grid[1, :], sharex=ax)
+    t_all, meas, fit, res = [], [], [], []
+    for k in np.flatnonzero(real):
+        m = mask[k]
+        t = np.asarray(seg.ts[k], dtype=float)[m]
+        y = np.asarray(seg.theta[k], dtype=float)[m]
+        f = np.asarray(result.fitted[k], dtype=float)[m]
+        ax.plot(t, y / alpha, ".", color="0.45", ms=2.5, label="measured" if not t_all else None)
+        ax.plot(t, f / alpha, "-", color="C3", lw=1.3, label="fitted model" if not t_all else None)
+        axr.plot(t, f - y, ".", color="C0", ms=2.0)
+        t_all.append(t), meas.append(y), fit.append(f), res.append(f - y)
+    cat = (lambda xs: np.concatenate(xs) if xs else np.zeros(0))
+    pk_t, pk_th = np.asarray(seg.peaks_t, dtype=float), np.asarray(seg.peaks_theta, dtype=float)
+    ax.plot(pk_t, pk_th / alpha, "v", mfc="none", color="k", ms=6, label="measured peaks (segment starts)")
+    ax.axhline(0.0, color="0.8", lw=0.6)
+    ax.set_ylabel(r"$\theta/\alpha'$")
+    ax.legend(fontsize=8, loc="upper right")
+    ax.tick_params(labelbottom=False)
+    noise = float(result.noise)
+    for s in (-noise, noise):
+        axr.axhline(s, color="0.6", lw=0.8, ls=":")
+    axr.axhline(0.0, color="0.8", lw=0.6)
+    axr.set_ylabel("residual [rad]")
+    axr.set_xlabel("t [s]")
+    axr.ticklabel_format(axis="y", style="sci", scilimits=(-2, 2))
+    est = np.asarray(result.estimate, dtype=float)
+    interval = np.asarray(result.interval, dtype=float)
+    if has_boot:
+        for i, name in enumerate(result.free):
+            axh = fig.add_subplot(grid[2, i])
+            axh.hist(boot[:, i], bins=min(30, max(5, boot.shape[0] // 4)), color="C0", alpha=0.6)
+            axh.axvline(est[i], color="k", lw=1.5)
+            for b in interval[i]:
+                axh.axvline(b, color="k", lw=0.9, ls="--")
+            axh.set_xlabel(name + ("" if result.identifiable[i] else " (not identifiable)"), fontsize=9)
+            axh.tick_params(labelsize=7)
+            axh.ticklabel_format(axis="x", useOffset=False)
+            if i == 0:
+                axh.set_ylabel("bootstrap", fontsize=8)
+    ax.set_title(title if title else "identification: " + ", ".join(f"{n} = {v:.4g}" for n, v in zip(result.free, est)), fontsize=9)
+    return _finish(fig, path, {"t": cat(t_all), "theta_measured": cat(meas), "theta_fitted": cat(fit), "residual": cat(res),
+                               "alpha": alpha, "peaks_t": pk_t, "peaks_theta": pk_th, "estimate": est, "interval": interval,
+                               "bootstrap": boot})
+
+
+__all__ += ["plot_identification"]

@@ -25,12 +25,13 @@ BackboneKind = Enum("BackboneKind", {k: k for k in BACKBONES}, type=str)
 LIST_HELP = "one value, or several ('1,2,5' or 'a:b:n'): an axis of the sweep"
 
 
-def with_params(lists: bool = False):
+def with_params(lists: bool = False, pulses: bool = True):
     """A command taking one option per declared parameter of the model kinds and pulse kinds
     (`jaxrock.scene.model_params`, `pulse_params`: the built-in kinds' and any registered before
     the command line was built, a plugin's included), its flag (`Param.flag`) and help generated
     from the declaration; the command receives them as keywords (None: not given; split them with
-    `split_params`). `lists`: each takes a sweep axis ('1,2,5', 'a:b:n') as text."""
+    `split_params`). `lists`: each takes a sweep axis ('1,2,5', 'a:b:n') as text; `pulses`: the
+    pulse kinds' parameters too (False: a command without pulses, the model kinds' only)."""
     import inspect
 
     import typer
@@ -40,7 +41,7 @@ def with_params(lists: bool = False):
     def decorate(command):
         sig = inspect.signature(command)
         own = [q for q in sig.parameters.values() if q.kind is not q.VAR_KEYWORD]
-        declared = {**model_params(), **pulse_params()}
+        declared = {**model_params(), **(pulse_params() if pulses else {})}
         added = [inspect.Parameter(p.name, inspect.Parameter.KEYWORD_ONLY, annotation=Optional[str] if lists else Optional[float],
                                    default=typer.Option(None, p.flag, help=parameter_help(p.name) + (f": {LIST_HELP}" if lists else "")))
                  for p in declared.values() if p.name not in sig.parameters]
