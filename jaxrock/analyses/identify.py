@@ -2,34 +2,40 @@
 measured rotation history θ(t) by gradient, with their uncertainty (issue 62).
 
 A rocking history is a hard loss: after a few impacts a small change of η shifts every later
-impact, and the least squares of θ(t) over a whole free-rocking test has a minimum per phase
-alignment. The loss here is **multiple shooting from the measured peaks** (`loss="multiple"`, the
-default): the measurement is cut at its peaks (the extremes of |θ| between two zero crossings,
-each refined by a parabola through its neighbours), where θ̇ = 0, so that the state there is the
-measured angle alone; each segment runs the model from one peak (t_k, θ_k, θ̇ = 0) over the
-samples to the next, through one impact, and the residuals of every segment are fitted together.
-No error can build up beyond one segment, and every impact gets the same weight. A segment that
-starts from rest (a run under ground motion) runs from the excitation's start. `loss="single"`
-fits the whole measurement from its first state (the release of a free-rocking test, or rest) in
-one run: it is the reference the study in `benchmarks/study_identify.py` held the choice against
-(docs/guide/identify.md).
+impact, and the least squares of θ(t) over a whole test has a minimum per phase alignment. Two
+losses, and the default ("auto") uses both:
 
-The fit is optimistix's Levenberg–Marquardt on the parameters mapped to an unbounded space
-(log for positive parameters, logit for those in an interval); the Jacobian is forward mode
-through the simulator (`jax.jacfwd`: a few parameters).
+- **the whole history** (`loss="single"`): the model run once from the measurement's first state
+  (a release at rest at the first sample, or rest under the ground motion) over every sample;
+- **multiple shooting from the measured peaks** (`loss="multiple"`): the measurement cut at its
+  peaks (the extremes of |θ| between two zero crossings, each refined by a parabola through its
+  neighbours), where θ̇ = 0, so that the state there is the measured angle alone; each segment runs
+  the model from one peak over the samples to the next, through one impact. No error builds up
+  beyond one segment: its loss keeps one basin over a wide range of starting values.
+
+In both, each start (angle and time) that comes from the measurement is fitted beside the
+parameters (a noisy start angle otherwise biases η by several standard errors; a release time off
+by a sample shifts the whole history). "auto" fits the whole history first and keeps it where it
+leaves no more than the noise (1.5 × the level estimated from the samples' second differences);
+else it fits the segments, then the whole history from their estimate, kept where it leaves no more
+than the noise; else the segments' fit is the answer. `benchmarks/study_identify.py` measured the choice (docs/guide/identify.md).
+
+The fit is optimistix's Levenberg–Marquardt on the parameters mapped to an unbounded space (log
+for positive parameters, logit for those in an interval), the Jacobian in forward mode through the
+simulator (`jax.jacfwd`: a few parameters). Spring models need a smooth backbone (`tanh`): across
+a kink of the bilinear one the derivative of a history is not the motion's.
 
 Uncertainty, both reported:
 
-- **Laplace** (Gauss–Newton): cov = s² (JᵀJ)⁻¹ at the estimate, J = ∂r/∂x in the natural
-  parameters, s² = SSR/(n − P). It assumes independent noise and exact segment starts.
-- **Bootstrap over segments**: the segments resampled with replacement (`n_boot` times) and the fit
-  repeated from the estimate, vmapped; it carries the noise of the measured starts too. With
-  `loss="single"` (one segment) the residuals are resampled instead.
+- **Laplace** (Gauss–Newton): cov = s² (JᵀJ)⁻¹ at the estimate, J = ∂r/∂(x, starts) in natural
+  units, s² = SSR/(n − P), the starts marginalised. It assumes independent noise.
+- **Bootstrap** (`n_boot` refits from the estimate): over the segments, resampled with replacement;
+  with one segment (the whole history), over the residuals, resampled around the fit.
 
 The reported 95 % `interval` is the hull of the two. A parameter the measurement does not
-determine (JᵀJ singular in its direction, or a standard error larger than half its value: η from a
-run without impacts, the column's E from a quasi-rigid response) is flagged (`identifiable`
-False), warned about, and gets its whole admissible range as interval.
+determine (a direction of JᵀJ below 10⁻¹² of its largest, or a standard error larger than half its
+value: the spring's θs beside c̄, a stiff column's ζ) is flagged (`identifiable` False), warned
+about, and gets its whole admissible range as interval; the others keep theirs.
 
 `history(model, excitation, ts, start=...)` is the forward model: θ at the times `ts` from rest, or
 from a state (t₀, θ₀, θ̇₀), for the rigid model (`RigidStepper` with a start) and the spring models
@@ -170,10 +176,10 @@ def history(model: AbstractModel, excitation: AbstractExcitation, ts, *, start=N
     Arguments:
         model: a `RigidModel` or a spring model.
         excitation: the ground motion (`StillGround()` for free rocking).
-        ts (ArrayLike): the times [s], non-decreasing, at or after the start.
+        ts (ArrayLike): the times [s], non-decreasing; before a `start` θ holds its θ₀ (a block held before its release).
         start (tuple | None): (t₀ [s], θ₀ [rad], θ̇₀ [rad/s]); default None: rest at the excitation's
             start. (t₀, 0, 0) is rest at t₀.
-        integrator: default None: `default_integrator(model)` (forward mode).
+        integrator (object): default None: `default_integrator(model)` (forward mode).
 
     Returns:
         (Array, Status): θ at `ts` [rad], and the run's status.
@@ -194,7 +200,8 @@ def history(model: AbstractModel, excitation: AbstractExcitation, ts, *, start=N
 
         start = None if start is None else tuple(jnp.asarray(v, dtype=float) for v in start)
         sol = RigidStepper(model, integrator, _save(ts), ts[-1], start).solve(excitation)
-        return sol.history["theta"], sol.status
+        theta = sol.history["theta"] if start is None else jnp.where(ts < start[0], start[1], sol.history["theta"])
+        return theta, sol.status
     if not isinstance(model, AbstractSpringModel) or not isinstance(integrator, SpringIntegrator):
         raise JaxrockInputError(f"history: a RigidModel or a spring model with a SpringIntegrator, got {type(model).__name__}")
     import diffrax
@@ -402,7 +409,7 @@ class _Problem(eqx.Module):
 
         def one(t0, th0, ts):
             theta, status = history(model, self.excitation, ts, start=(t0, th0, 0.0), integrator=self.integrator)
-            return jnp.where(ts < t0, th0, theta), status == Status.ok
+            return theta, status == Status.ok
 
         theta, ok = jax.vmap(one)(t0, theta0, self.ts)
         return theta, ok
@@ -447,7 +454,7 @@ class Identification:
         converged: whether the fit met its tolerance.
         iterations: the Levenberg–Marquardt steps.
         rms: the RMS residual [rad]; noise: the noise estimated from the samples [rad].
-        loss: "multiple" or "single"; n_segments, n_samples: what was fitted.
+        loss: "multiple" or "single" (the one "auto" kept); n_segments, n_samples: what was fitted.
         model: the model at the estimates.
         segments: the measurement's segments (`Segments`); fitted: θ of the fitted model on them (K, L).
         seconds: the wall time of the fit and of the bootstrap [s].
@@ -523,7 +530,7 @@ def identify(
             estimate, kept where it fits as well), "multiple" or "single" (the whole history from its first state).
         n_boot: bootstrap resamplings, ≥ 0 (0: the Laplace interval only); default 50.
         seed: the bootstrap's random seed; default 0.
-        integrator: default None: `default_integrator(model)` (forward mode).
+        integrator (object): default None: `default_integrator(model)` (forward mode).
         rtol: Levenberg–Marquardt's tolerance on the parameters (relative, in the unbounded space);
             default 1e-8.
         max_steps: the most Levenberg–Marquardt steps; default 100.
@@ -616,12 +623,17 @@ def _fit(measured, model, free, loss, x0, integrator, n_boot, seed, rtol, max_st
     x = np.asarray(x_hat)
     scale = np.r_[np.where(np.abs(x) > 0, np.abs(x), 1.0), np.ones(J.shape[1] - P)]
     Js = (J.T @ J) * np.outer(scale, scale)  # in relative units: comparable across parameters
-    eig = np.linalg.eigvalsh(Js) if np.all(np.isfinite(Js)) else np.zeros(P)
-    singular = bool(eig.min() <= 1e-12 * max(eig.max(), 1e-300))
-    # the free parameters' block of the inverse: their covariance with the start angles marginalised
-    cov = np.full((P, P), np.inf) if singular else s2 * (np.linalg.inv(Js) * np.outer(scale, scale))[:P, :P]
+    finite = bool(np.all(np.isfinite(Js)))
+    eig = np.linalg.eigvalsh(Js) if finite else np.zeros(1)
+    # the free parameters' block of the inverse: their covariance with the start angles marginalised; a direction
+    # the data do not see (eigenvalue ≤ 1e-12 of the largest) is regularised at that level, so that the parameters
+    # in it get a huge variance (flagged below) and the others keep theirs
+    ridge = 1e-12 * max(eig.max(), 1e-300) * np.eye(Js.shape[0])
+    cov = s2 * (np.linalg.inv(Js + ridge) * np.outer(scale, scale))[:P, :P] if finite else np.full((P, P), np.inf)
     se = np.sqrt(np.abs(np.diag(cov)))
     scale = scale[:P]
+    identifiable = np.isfinite(se) & (se / scale < 0.5)
+    singular = not identifiable.all()
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se)
     laplace = np.stack([x - 1.96 * se, x + 1.96 * se], axis=1)
@@ -653,8 +665,6 @@ def _fit(measured, model, free, loss, x0, integrator, n_boot, seed, rtol, max_st
             boot_int = np.quantile(boot, [0.025, 0.975], axis=0).T
     seconds_boot = time.perf_counter() - tic
 
-    rel = se / scale
-    identifiable = ~singular & np.isfinite(se) & (rel < 0.5)
     interval = np.stack([np.fmin(laplace[:, 0], boot_int[:, 0]), np.fmax(laplace[:, 1], boot_int[:, 1])], axis=1)
     interval = np.clip(interval, np.asarray(lo), np.asarray(hi))
     interval = np.where(identifiable[:, None], interval, np.stack([np.asarray(lo), np.asarray(hi)], axis=1))
