@@ -160,6 +160,7 @@ def _coverage(truth_model, start_model, name, value, sigma, excitation=None, t=T
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)
 @pytest.mark.parametrize("sigma", [2e-4, 2e-3])
 def test_coverage_eta_free_rocking(sigma):
     inside, errors = _coverage(jr.RigidModel(BLOCK, eta=0.9), jr.RigidModel(BLOCK, eta=0.8), "eta", 0.9, sigma)
@@ -168,6 +169,7 @@ def test_coverage_eta_free_rocking(sigma):
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)
 def test_coverage_eta_pulse():
     t = np.arange(PULSE.t_start, PULSE.t_end + 4.0, 0.005)
     inside, errors = _coverage(jr.RigidModel(BLOCK, eta=0.88), jr.RigidModel(BLOCK, eta=0.95), "eta", 0.88, 5e-4, PULSE, t)
@@ -175,6 +177,7 @@ def test_coverage_eta_pulse():
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)
 @pytest.mark.parametrize("sigma", [1e-3])
 def test_coverage_cbar(sigma):
     inside, errors = _coverage(jr.SpringModel(BLOCK, cbar=0.03, backbone="tanh"), jr.SpringModel(BLOCK, cbar=0.06, backbone="tanh"),

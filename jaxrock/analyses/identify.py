@@ -6,7 +6,8 @@ impact, and the least squares of θ(t) over a whole test has a minimum per phase
 losses, and the default ("auto") uses both:
 
 - **the whole history** (`loss="single"`): the model run once from the measurement's first state
-  (a release at rest at the first sample, or rest under the ground motion) over every sample;
+  (a release at rest at the first sample, or rest under the ground motion) over every sample up to
+  the last peak;
 - **multiple shooting from the measured peaks** (`loss="multiple"`): the measurement cut at its
   peaks (the extremes of |θ| between two zero crossings, each refined by a parabola through its
   neighbours), where θ̇ = 0, so that the state there is the measured angle alone; each segment runs
@@ -526,8 +527,9 @@ def identify(
             (`RigidModel`, `SpringModel`).
         free: the names to fit, from `FREE`: "eta" (rigid), "cbar", "smoothing" (spring), "zeta", "E"
             (flexible column), "height" (2h at fixed slenderness); default ("eta",).
-        loss: "auto" (default: multiple shooting from the measured peaks, then the whole history from its
-            estimate, kept where it fits as well), "multiple" or "single" (the whole history from its first state).
+        loss: "auto" (default: the whole history; where it leaves more than the noise, multiple shooting from
+            the measured peaks and the whole history again from its estimate), "single" (the whole history from
+            its first state) or "multiple" (the segments between the measured peaks).
         n_boot: bootstrap resamplings, ≥ 0 (0: the Laplace interval only); default 50.
         seed: the bootstrap's random seed; default 0.
         integrator (object): default None: `default_integrator(model)` (forward mode).
