@@ -54,7 +54,7 @@ def test_free_rocking_peaks_follow_eq3():
 # slow: a fit compiles for 60–200 s on 2 cores (identify's kernels miss the persistent cache), and the
 # default run grew to 12.5 min in CI with it
 @pytest.mark.slow
-@pytest.mark.parametrize("sigma", [2e-4, 1e-3])
+@pytest.mark.parametrize("sigma", [2e-4])
 def test_identify_eta_free_rocking(sigma):
     """η from a noisy free-rocking test: within the noise's reach of the truth, the truth inside the
     interval, and in agreement with the closed-form peak-ratio estimate within its own scatter."""
@@ -85,17 +85,6 @@ def test_multiple_shooting_segments_start_at_peaks():
         assert np.count_nonzero(np.diff(s)) == 1, k  # exactly one zero crossing: one impact
     fit = jr.identify(jr.Measured(T, _noisy(theta, 2e-4, 5)), jr.RigidModel(BLOCK, eta=0.7), ["eta"], loss="multiple", n_boot=0)
     assert fit.loss == "multiple" and abs(fit.estimate[0] - 0.9) < 4 * fit.se[0] and fit.interval[0, 0] <= 0.9 <= fit.interval[0, 1]
-
-
-@pytest.mark.slow
-def test_identify_eta_under_a_pulse():
-    """η of a block rocked from rest by a pulse (the first segment runs from rest)."""
-    ts = np.arange(PULSE.t_start, PULSE.t_end + 4.0, 0.005)
-    theta, status = history(jr.RigidModel(BLOCK, eta=0.88), PULSE, ts)
-    assert status == jr.Status.ok and np.max(np.abs(theta)) > 0.2 * ALPHA
-    fit = jr.identify(jr.Measured(ts, _noisy(np.asarray(theta), 3e-4, 1), PULSE), jr.RigidModel(BLOCK, eta=0.95), ["eta"], n_boot=0)
-    assert fit.segments.theta0[0] == 0.0  # from rest
-    assert fit.interval[0, 0] <= 0.88 <= fit.interval[0, 1] and abs(fit.estimate[0] - 0.88) < 4 * fit.se[0] + 1e-6
 
 
 @pytest.mark.slow
@@ -164,7 +153,7 @@ def _coverage(truth_model, start_model, name, value, sigma, excitation=None, t=T
 
 @pytest.mark.slow
 @pytest.mark.timeout(1800)
-@pytest.mark.parametrize("sigma", [2e-4, 2e-3])
+@pytest.mark.parametrize("sigma", [2e-3])  # 2e-4 passed too (356 s); one level kept for CI's time
 def test_coverage_eta_free_rocking(sigma):
     inside, errors = _coverage(jr.RigidModel(BLOCK, eta=0.9), jr.RigidModel(BLOCK, eta=0.8), "eta", 0.9, sigma)
     assert inside >= 45, (inside, errors)
