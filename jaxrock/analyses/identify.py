@@ -415,10 +415,13 @@ class _Problem(eqx.Module):
         theta, ok = jax.vmap(one)(t0, theta0, self.ts)
         return theta, ok
 
-    def residuals(self, x, weights):
-        theta, _ = self.predict(x)
-        r = jnp.where(self.mask, theta - self.theta, 0.0)
-        return r * jnp.sqrt(weights)[:, None]
+    def residuals(self, z, weights):
+        """The weighted residuals (K, L) of the parameters z (`predict`)."""
+        return self.residuals_of(self.predict(z)[0], weights)
+
+    def residuals_of(self, theta, weights):
+        """The weighted residuals (K, L) of a predicted θ (K, L): zero at the padding."""
+        return jnp.where(self.mask, theta - self.theta, 0.0) * jnp.sqrt(weights)[:, None]
 
 
 @eqx.filter_jit
@@ -428,10 +431,13 @@ def _solve(problem: _Problem, u0, weights, rtol, max_steps):
     fn = lambda u, w: problem.residuals(problem.natural(u), w)
     sol = optx.least_squares(fn, optx.LevenbergMarquardt(rtol=rtol, atol=rtol), u0, args=weights,
                              max_steps=max_steps, throw=False, options={"jac": "fwd"})
-    z = problem.natural(sol.value)
-    r = problem.residuals(z, weights)
-    J = jax.jacfwd(lambda z: problem.residuals(z, weights))(z)
-    theta, ok = problem.predict(z)
+
+    def residuals_and_run(z):  # one forward pass gives the Jacobian, the residuals and the fitted θ
+        theta, ok = problem.predict(z)
+        r = problem.residuals_of(theta, weights)
+        return r, (r, theta, ok)
+
+    J, (r, theta, ok) = jax.jacfwd(residuals_and_run, has_aux=True)(problem.natural(sol.value))
     return sol.value, sol.result == optx.RESULTS.successful, sol.stats["num_steps"], r, J, theta, ok
 
 
