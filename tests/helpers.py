@@ -89,3 +89,33 @@ def pre_yield_rotation(model, ratio: float) -> float:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if float(model.backbone.unit_moment(mid)) < ratio else (lo, mid)
     return float(model.smoothing) * lo
+
+
+# -- a command line in a fresh interpreter (this process has long imported JAX) --------------------
+HEAVY = ("jax", "jaxlib", "equinox", "diffrax", "optimistix", "matplotlib", "xarray", "scipy")
+
+CLI = """
+    import json, sys
+    from jaxrock.cli import app
+    try:
+        app({args!r}, standalone_mode=True)
+    except SystemExit as e:
+        code = e.code
+    print(json.dumps({{"code": code, "heavy": [m for m in {heavy!r} if m in sys.modules]}}))
+"""
+
+
+def fresh_python(code: str, env: dict | None = None) -> dict:
+    """Run `code` in a fresh interpreter; it prints one JSON line last, returned."""
+    import json
+    import textwrap
+
+    r = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=240,
+                       env={**os.environ, **(env or {})})
+    assert r.returncode == 0, r.stderr[-3000:]
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def fresh_cli(args) -> dict:
+    """`jaxrock ARGS` in a fresh interpreter: its exit code and the heavy libraries (`HEAVY`) it imported."""
+    return fresh_python(CLI.format(args=list(args), heavy=HEAVY))

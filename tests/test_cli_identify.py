@@ -6,17 +6,12 @@ cores, cold): they are in the slow set, the refusals and the reader in the defau
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
-import textwrap
 
 import numpy as np
 import pytest
 
-from helpers import invoke, read_csv, write
+from helpers import fresh_cli, invoke, read_csv, write
 
-HEAVY = ("jax", "jaxlib", "equinox", "diffrax", "optimistix", "matplotlib", "xarray", "scipy")
 ETA = 0.9
 
 
@@ -142,17 +137,6 @@ def test_a_missing_file_and_an_hdf5_file_are_refused(tmp_path):
     assert r.exit_code == 2 and "netCDF-4 (HDF5)" in r.output and "netCDF-3" in r.output
 
 
-CLI = """
-    import json, sys
-    from jaxrock.cli import app
-    try:
-        app({args!r}, standalone_mode=True)
-    except SystemExit as e:
-        code = e.code
-    print(json.dumps({{"code": code, "heavy": [m for m in {heavy!r} if m in sys.modules]}}))
-"""
-
-
 @pytest.mark.parametrize("args, code", [
     (["identify", "--help"], 0),
     (["identify", "{m}", "--free", "bogus", "--height", "2", "--tan-alpha", "0.15"], 2),
@@ -165,11 +149,7 @@ def test_help_and_refusals_import_no_jax(tmp_path, args, code):
     """`identify --help` and the refusals answer without importing JAX or the other heavy libraries
     (as tests/test_startup.py holds for the other commands), in a fresh interpreter."""
     files = {"m": str(_sine(tmp_path / "m.csv")), "bad": str(write(tmp_path / "bad.csv", "t,phi\n0,1\n"))}
-    args = [a.format(**files) for a in args]
-    r = subprocess.run([sys.executable, "-c", textwrap.dedent(CLI.format(args=args, heavy=HEAVY))], capture_output=True,
-                       text=True, timeout=120, env={**os.environ})
-    assert r.returncode == 0, r.stderr[-2000:]
-    assert json.loads(r.stdout.strip().splitlines()[-1]) == {"code": code, "heavy": []}, r.stdout[-2000:]
+    assert fresh_cli([a.format(**files) for a in args]) == {"code": code, "heavy": []}
 
 
 # -- the reader and the figure --------------------------------------------------------------------

@@ -5,34 +5,11 @@ Each check runs in a fresh interpreter (this process has long imported JAX)."""
 
 from __future__ import annotations
 
-import json
 import os
-import subprocess
-import sys
-import textwrap
 
 import pytest
 
-HEAVY = ("jax", "jaxlib", "equinox", "diffrax", "optimistix", "matplotlib", "xarray", "scipy")
-
-
-def _python(code: str, env: dict | None = None) -> dict:
-    """Run `code` in a fresh interpreter; it prints one JSON line last, returned."""
-    r = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=240,
-                       env={**os.environ, **(env or {})})
-    assert r.returncode == 0, r.stderr[-3000:]
-    return json.loads(r.stdout.strip().splitlines()[-1])
-
-
-CLI = """
-    import json, sys
-    from jaxrock.cli import app
-    try:
-        app({args!r}, standalone_mode=True)
-    except SystemExit as e:
-        code = e.code
-    print(json.dumps({{"code": code, "heavy": [m for m in {heavy!r} if m in sys.modules]}}))
-"""
+from helpers import fresh_cli, fresh_python
 
 
 @pytest.mark.parametrize("args, code", [
@@ -48,13 +25,13 @@ def test_help_and_refused_arguments_import_no_jax(args, code):
     """`--help` and a refused argument end (exit 0 / 2) without importing JAX or the other heavy
     libraries: the help and the checks come from JAX-free modules (`jaxrock.scene`,
     `jaxrock.outputs`, `jaxrock._validate`)."""
-    out = _python(CLI.format(args=args, heavy=HEAVY))
+    out = fresh_cli(args)
     assert out == {"code": code, "heavy": []}
 
 
 def test_a_run_still_imports_what_it_needs():
     """The check above can fail: a command that runs a scene does import JAX (and answers)."""
-    out = _python(CLI.format(args=["simulate", "--accel-ratio", "3", "--omega-ratio", "4"], heavy=HEAVY))
+    out = fresh_cli(["simulate", "--accel-ratio", "3", "--omega-ratio", "4"])
     assert out["code"] in (0, None) and {"jax", "equinox", "diffrax"} <= set(out["heavy"])
 
 
@@ -65,7 +42,7 @@ def test_jax_runs_in_float64_with_the_cache_whoever_imports_it(order, tmp_path):
     first = {"jaxrock first, then jax by the user": "import jaxrock\nimport jax",
              "jax first": "import jax\nimport jaxrock",
              "jaxrock's names first": "import jaxrock as jr\njr.Block\nimport jax"}[order]
-    out = _python(first + """
+    out = fresh_python(first + """
 import json, os
 import jax.numpy as jnp
 print(json.dumps({"dtype": str(jnp.asarray(1.0).dtype), "cache": jax.config.jax_compilation_cache_dir,
@@ -88,7 +65,7 @@ def _version() -> str:
 def test_every_public_name_resolves():
     """`__all__` (imported on first use) names real objects, `from jaxrock import *` takes them
     all, submodules resolve as attributes, and a wrong name is an AttributeError."""
-    out = _python("""
+    out = fresh_python("""
         import json
         import jaxrock as jr
         names = {n: type(getattr(jr, n)).__name__ for n in jr.__all__}
