@@ -636,8 +636,10 @@ __all__ += ["plot_damage_states", "plot_ida", "plot_deaggregation"]
 def plot_identification(result, path=None, *, title=None):
     """An identification (`jaxrock.identify`): the measured θ/α′ as dots and the fitted model's as
     lines, one per segment (each starts at a measured peak, marked), the residuals θ_model − θ_measured
-    below with ± the estimated noise, and, where there are bootstrap estimates, one histogram per
-    parameter with its estimate and 95 % interval."""
+    below with ± the estimated noise; where the top displacement was measured, the column's deflection
+    u_top − 2h sinθ (θ the fitted one, for the measured and the fitted u_top: the bending that shows ζ
+    and E); and, where there are bootstrap estimates, one histogram per parameter with its estimate and
+    95 % interval."""
     seg = result.segments
     alpha = float(result.model.block.alpha_r)
     mask = np.asarray(seg.mask, dtype=bool)
@@ -645,12 +647,15 @@ def plot_identification(result, path=None, *, title=None):
     boot = np.asarray(result.bootstrap, dtype=float)
     P = len(result.free)
     has_boot = boot.ndim == 2 and boot.shape[0] > 0
-    rows = [3.0, 1.4] + ([1.6] if has_boot else [])
+    has_top = result.fitted_top is not None
+    rows = [3.0, 1.4] + ([1.8] if has_top else []) + ([1.6] if has_boot else [])
     fig = plt.figure(figsize=(7.5, 1.3 * sum(rows) + 0.6), constrained_layout=True)
     grid = fig.add_gridspec(len(rows), max(P, 1), height_ratios=rows)
     ax = fig.add_subplot(grid[0, :])
     axr = fig.add_subplot(grid[1, :], sharex=ax)
-    t_all, meas, fit, res = [], [], [], []
+    axw = fig.add_subplot(grid[2, :], sharex=ax) if has_top else None
+    two_h = 2.0 * float(result.model.block.h)
+    t_all, meas, fit, res, bend = [], [], [], [], []
     for k in np.flatnonzero(real):
         m = mask[k]
         t = np.asarray(seg.ts[k], dtype=float)[m]
@@ -660,6 +665,14 @@ def plot_identification(result, path=None, *, title=None):
         ax.plot(t, f / alpha, "-", color="C3", lw=1.3, label="fitted model" if not t_all else None)
         axr.plot(t, f - y, ".", color="C0", ms=2.0)
         t_all.append(t), meas.append(y), fit.append(f), res.append(f - y)
+        if has_top:
+            rigid = two_h * np.sin(f)
+            mt = np.asarray(seg.top_mask[k], dtype=bool)[m]
+            w_meas = np.where(mt, np.asarray(seg.top[k], dtype=float)[m] - rigid, np.nan)
+            w_fit = np.asarray(result.fitted_top[k], dtype=float)[m] - rigid
+            axw.plot(t, 1e3 * w_meas, ".", color="0.45", ms=2.0)
+            axw.plot(t, 1e3 * w_fit, "-", color="C3", lw=1.0)
+            bend.append(np.stack([w_meas, w_fit]))
     cat = (lambda xs: np.concatenate(xs) if xs else np.zeros(0))
     pk_t, pk_th = np.asarray(seg.peaks_t, dtype=float), np.asarray(seg.peaks_theta, dtype=float)
     ax.plot(pk_t, pk_th / alpha, "v", mfc="none", color="k", ms=6, label="measured peaks (segment starts)")
@@ -674,11 +687,17 @@ def plot_identification(result, path=None, *, title=None):
     axr.set_ylabel("residual [rad]")
     axr.set_xlabel("t [s]")
     axr.ticklabel_format(axis="y", style="sci", scilimits=(-2, 2))
+    if has_top:
+        axr.tick_params(labelbottom=False)
+        axr.set_xlabel("")
+        axw.axhline(0.0, color="0.8", lw=0.6)
+        axw.set_ylabel("u_top − 2h sinθ [mm]", fontsize=8)
+        axw.set_xlabel("t [s]")
     est = np.asarray(result.estimate, dtype=float)
     interval = np.asarray(result.interval, dtype=float)
     if has_boot:
         for i, name in enumerate(result.free):
-            axh = fig.add_subplot(grid[2, i])
+            axh = fig.add_subplot(grid[len(rows) - 1, i])
             axh.hist(boot[:, i], bins=min(30, max(5, boot.shape[0] // 4)), color="C0", alpha=0.6)
             axh.axvline(est[i], color="k", lw=1.5)
             for b in interval[i]:
@@ -691,7 +710,7 @@ def plot_identification(result, path=None, *, title=None):
     ax.set_title(title if title else "identification: " + ", ".join(f"{n} = {v:.4g}" for n, v in zip(result.free, est)), fontsize=9)
     return _finish(fig, path, {"t": cat(t_all), "theta_measured": cat(meas), "theta_fitted": cat(fit), "residual": cat(res),
                                "alpha": alpha, "peaks_t": pk_t, "peaks_theta": pk_th, "estimate": est, "interval": interval,
-                               "bootstrap": boot})
+                               "bootstrap": boot, "deflection": np.concatenate(bend, axis=1) if bend else None})
 
 
 __all__ += ["plot_identification"]

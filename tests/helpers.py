@@ -119,3 +119,33 @@ def fresh_python(code: str, env: dict | None = None) -> dict:
 def fresh_cli(args) -> dict:
     """`jaxrock ARGS` in a fresh interpreter: its exit code and the heavy libraries (`HEAVY`) it imported."""
     return fresh_python(CLI.format(args=list(args), heavy=HEAVY))
+
+
+def noisy(x, sigma, seed):
+    """`x` with seeded Gaussian noise of standard deviation `sigma` (a measured channel)."""
+    import numpy as np
+
+    return x + np.random.default_rng(seed).normal(0.0, sigma, x.size)
+
+
+def identification_coverage(truth_model, start_model, name, value, t, *, sigma, trials, alpha_r,
+                            excitation=None, sigma_top=None):
+    """Seeded noisy runs of `truth_model` (free rocking from 0.8 α′, or from rest under `excitation`;
+    with `sigma_top`, its top displacement measured too, with that noise [m]) fitted from
+    `start_model`: how many of the `trials` reported 95 % intervals hold `value`, and the errors."""
+    import numpy as np
+
+    import jaxrock as jr
+    from jaxrock.analyses.identify import history
+
+    start = (0.0, 0.8 * alpha_r, 0.0) if excitation is None else None
+    clean = history(truth_model, excitation or jr.StillGround(), t, start=start, top=True)
+    assert clean[-1] == jr.Status.ok
+    inside, errors = 0, []
+    for seed in range(trials):
+        top = None if sigma_top is None else noisy(np.asarray(clean[1]), sigma_top, 200 + seed)
+        measured = jr.Measured(t, noisy(np.asarray(clean[0]), sigma, 100 + seed), excitation, top=top)
+        fit = jr.identify(measured, start_model, [name], n_boot=0, warn=False)
+        inside += fit.interval[0, 0] <= value <= fit.interval[0, 1]
+        errors.append(fit.estimate[0] - value)
+    return inside, np.asarray(errors)

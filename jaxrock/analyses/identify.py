@@ -168,8 +168,9 @@ def default_integrator(model: AbstractModel):
     return dataclasses.replace(spring_default(model), autodiff="forward")
 
 
-def history(model: AbstractModel, excitation: AbstractExcitation, ts, *, start=None, integrator=None):
-    """θ [rad] of `model` at the times `ts`, from rest at the excitation's start or from a state.
+def history(model: AbstractModel, excitation: AbstractExcitation, ts, *, start=None, integrator=None, top: bool = False):
+    """θ [rad] of `model` at the times `ts`, from rest at the excitation's start or from a state; with
+    `top`, also the column top's horizontal displacement relative to the ground [m].
 
     A pure function: `jax.vmap` and forward-mode `jax.jacfwd` (w.r.t. the model's leaves and the
     start) accept it.
@@ -181,9 +182,11 @@ def history(model: AbstractModel, excitation: AbstractExcitation, ts, *, start=N
         start (tuple | None): (t₀ [s], θ₀ [rad], θ̇₀ [rad/s]); default None: rest at the excitation's
             start. (t₀, 0, 0) is rest at t₀.
         integrator (object): default None: `default_integrator(model)` (forward mode).
+        top: also return the top displacement u_top [m] at `ts`: 2h sinθ for the rigid and quasi-rigid
+            bodies, the rotated and bent column's for a flexible one; default False.
 
     Returns:
-        (Array, Status): θ at `ts` [rad], and the run's status.
+        (Array, Status) or (Array, Array, Status): θ at `ts` [rad] (and u_top [m] with `top`), and the run's status.
 
     Example:
         ```python
@@ -202,7 +205,7 @@ def history(model: AbstractModel, excitation: AbstractExcitation, ts, *, start=N
         start = None if start is None else tuple(jnp.asarray(v, dtype=float) for v in start)
         sol = RigidStepper(model, integrator, _save(ts), ts[-1], start).solve(excitation)
         theta = sol.history["theta"] if start is None else jnp.where(ts < start[0], start[1], sol.history["theta"])
-        return theta, sol.status
+        return (theta, 2 * model.block.h * jnp.sin(theta), sol.status) if top else (theta, sol.status)
     if not isinstance(model, AbstractSpringModel) or not isinstance(integrator, SpringIntegrator):
         raise JaxrockInputError(f"history: a RigidModel or a spring model with a SpringIntegrator, got {type(model).__name__}")
     import diffrax
@@ -210,28 +213,36 @@ def history(model: AbstractModel, excitation: AbstractExcitation, ts, *, start=N
     system = model.system()
     t0, theta0, theta_dot0 = (excitation.t_start, 0.0, 0.0) if start is None else start
     t0 = jnp.asarray(t0, dtype=float)
+    save = (lambda t, y, args: jnp.stack([y[0], system.top_displacement(system.split(y)[0])])) if top else \
+        (lambda t, y, args: y[0])
+    # a sample before the start is saved at the start: the body held in its initial state
     sol = integrator.solve(system, excitation, system.initial_state(theta0, theta_dot0), t0, ts[-1],
-                           saveat=diffrax.SaveAt(ts=jnp.maximum(ts, t0), fn=lambda t, y, args: y[0]))
-    return sol.ys, diffrax_status(sol.result)
+                           saveat=diffrax.SaveAt(ts=jnp.maximum(ts, t0), fn=save))
+    status = diffrax_status(sol.result)
+    return (sol.ys[:, 0], sol.ys[:, 1], status) if top else (sol.ys, status)
 
 
 # ----------------------------------------------------------------------------------------------
 # the measurement and its segments
 # ----------------------------------------------------------------------------------------------
 class Measured(eqx.Module):
-    """A measured rotation history and the ground motion it was measured under.
+    """A measured rotation history, optionally the top displacement, and the ground motion they were measured under.
 
     Attributes:
         t: the sample times [s], strictly increasing.
         theta: the base rotation θ [rad] at `t` (NaN: a missing sample, left out).
         excitation: the ground motion (`StillGround()` for a free-rocking test; a `Record` or pulse).
+        top: the column top's horizontal displacement relative to the ground u_top [m] at `t` (NaN: a
+            missing sample), or None (default). A flexible column's bending (its E, its damping ζ) shows
+            in it far more than in θ: 2h sinθ plus the column's deflection.
     """
 
     t: Float[Array, " n"]
     theta: Float[Array, " n"]
     excitation: AbstractExcitation
+    top: Float[Array, " n"] | None
 
-    def __init__(self, t, theta, excitation: AbstractExcitation | None = None):
+    def __init__(self, t, theta, excitation: AbstractExcitation | None = None, top=None):
         t = np.asarray(t, dtype=float)
         theta = np.asarray(theta, dtype=float)
         if t.ndim != 1 or t.shape != theta.shape or t.size < 8:
@@ -240,9 +251,15 @@ class Measured(eqx.Module):
             raise JaxrockInputError("measured: t must be finite and strictly increasing [s]")
         if not np.any(np.isfinite(theta)):
             raise JaxrockInputError("measured: theta holds no finite sample")
+        if top is not None:
+            top = np.asarray(top, dtype=float)
+            if top.shape != t.shape or not np.any(np.isfinite(top)):
+                raise JaxrockInputError(f"measured: top must be 1-D of the length of t ({t.size}) with a finite sample, "
+                                        f"got shape {top.shape}")
         self.t = jnp.asarray(t)
         self.theta = jnp.asarray(theta)
         self.excitation = StillGround() if excitation is None else excitation
+        self.top = None if top is None else jnp.asarray(top)
 
 
 class Segments(NamedTuple):
@@ -254,6 +271,8 @@ class Segments(NamedTuple):
         mask: which of them are real (K, L).
         peaks_t, peaks_theta: every peak found (time [s], θ [rad]), in order.
         noise: the noise level estimated from the samples' second differences [rad].
+        top, top_mask: the measured top displacement [m] on the samples, and which are real (K, L); None without one.
+        top_noise: its noise level [m] (NaN without one).
     """
 
     t0: np.ndarray
@@ -264,13 +283,19 @@ class Segments(NamedTuple):
     peaks_t: np.ndarray
     peaks_theta: np.ndarray
     noise: float
+    top: np.ndarray | None = None
+    top_mask: np.ndarray | None = None
+    top_noise: float = math.nan
 
 
-def noise_level(theta) -> float:
-    """The standard deviation of white noise on a smooth signal, from its second differences (MAD)."""
-    d2 = np.diff(np.asarray(theta, dtype=float), 2)
-    d2 = d2[np.isfinite(d2)]
-    return float(np.median(np.abs(d2 - np.median(d2))) / 0.6745 / math.sqrt(6.0)) if d2.size else 0.0
+def noise_level(theta, order: int = 2) -> float:
+    """The standard deviation of white noise on a smooth signal, from its differences of `order` (MAD;
+    the variance of white noise's k-th differences is C(2k, k) σ²). θ's second differences suffice; a top
+    displacement's metres of motion against micrometres of noise need the fourth (a signal of ω dt ≪ 1
+    shrinks by (ω dt)^k)."""
+    d = np.diff(np.asarray(theta, dtype=float), order)
+    d = d[np.isfinite(d)]
+    return float(np.median(np.abs(d - np.median(d))) / 0.6745 / math.sqrt(math.comb(2 * order, order))) if d.size else 0.0
 
 
 def find_peaks(t, theta, p: float, noise: float | None = None):
@@ -354,21 +379,26 @@ def segments(measured: Measured, p: float, loss: str = "multiple") -> Segments:
         t0, th0, i0 = starts[0][:3]
         starts = [(t0, th0, i0, starts[-1][3])]
     starts = [s for s in starts if s[3] > s[2]]
-    # shapes padded (K to a multiple of 4, L of 64) so that measurements of similar sizes share one compilation;
-    # a padding segment repeats the first one's start and holds no sample
+    # shapes padded (K segments to a multiple of 4, L samples of 64) so that measurements of similar sizes share one
+    # compilation; a padding segment repeats the first one's start and holds no sample (the whole history: one, unpadded)
     L = -(-max(s[3] - s[2] for s in starts) // 64) * 64
-    K = -(-len(starts) // 4) * 4
+    K = -(-len(starts) // 4) * 4 if loss != "single" else 1
     starts += [starts[0][:2] + (0, 0)] * (K - len(starts))
     ts = np.zeros((K, L))
-    thm = np.zeros((K, L))
-    mask = np.zeros((K, L), bool)
     for k, (t0, th0, i0, i1) in enumerate(starts):
-        idx = np.arange(i0, i1)
-        ts[k, : idx.size], thm[k, : idx.size] = t[idx], th[idx]
-        mask[k, : idx.size] = np.isfinite(th[idx])
-        ts[k, idx.size:] = t[i1 - 1] if i1 > i0 else t0
-    thm = np.where(mask, thm, 0.0)
-    return Segments(np.asarray([s[0] for s in starts]), np.asarray([s[1] for s in starts]), ts, thm, mask, pk_t, pk_th, noise)
+        ts[k, : i1 - i0] = t[i0:i1]
+        ts[k, i1 - i0:] = t[i1 - 1] if i1 > i0 else t0
+
+    def cut(x):  # a channel's samples on the segments (0 where missing or padding), and which are real
+        out, real = np.zeros((K, L)), np.zeros((K, L), bool)
+        for k, (_, _, i0, i1) in enumerate(starts):
+            out[k, : i1 - i0], real[k, : i1 - i0] = x[i0:i1], np.isfinite(x[i0:i1])
+        return np.where(real, out, 0.0), real
+
+    thm, mask = cut(th)
+    top, top_mask = (None, None) if measured.top is None else cut(np.asarray(measured.top))
+    return Segments(np.asarray([s[0] for s in starts]), np.asarray([s[1] for s in starts]), ts, thm, mask, pk_t, pk_th, noise,
+                    top, top_mask, math.nan if top is None else noise_level(measured.top, order=4))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -391,6 +421,9 @@ class _Problem(eqx.Module):
     at_peak: Array  # (K,) whether a segment starts at a measured peak (its start angle is fitted too)
     unit: Array  # the start angles' correction unit [rad] (α′)
     time_unit: Array  # the start times' correction unit [s] (1/p′)
+    top: Array | None = None  # the measured top displacement (K, L) [m], or None
+    top_mask: Array | None = None
+    top_weight: Array | float = 1.0  # its residuals' weight: σ_θ/σ_u, so that both channels' residuals are in radians of θ noise
 
     def natural(self, u):
         """The free parameters (natural units) and the start angles' corrections (× `unit`) from the unbounded vector."""
@@ -400,8 +433,8 @@ class _Problem(eqx.Module):
 
     def predict(self, z):
         """θ of the model with parameters z = (x, start-angle corrections [α′], start-time corrections [1/p′])
-        over every segment (K, L), and whether every run succeeded; a sample before its segment's start
-        holds the start angle (a block held before its release)."""
+        over every segment (K, L), its top displacement (K, L; None where none is measured), and whether
+        every run succeeded; a sample before its segment's start holds the start (a block held before its release)."""
         P, K = len(self.free), self.t0.shape[0]
         x, d_theta, d_t = z[:P], z[P:P + K], z[P + K:]
         model = with_values(self.model, self.free, x)
@@ -409,19 +442,24 @@ class _Problem(eqx.Module):
         t0 = self.t0 + jnp.where(self.at_peak, d_t * self.time_unit, 0.0)
 
         def one(t0, th0, ts):
-            theta, status = history(model, self.excitation, ts, start=(t0, th0, 0.0), integrator=self.integrator)
-            return theta, status == Status.ok
+            out = history(model, self.excitation, ts, start=(t0, th0, 0.0), integrator=self.integrator,
+                          top=self.top is not None)
+            return out[:-1], out[-1] == Status.ok
 
-        theta, ok = jax.vmap(one)(t0, theta0, self.ts)
-        return theta, ok
+        run, ok = jax.vmap(one)(t0, theta0, self.ts)
+        return run[0], (run[1] if self.top is not None else None), ok
 
     def residuals(self, z, weights):
-        """The weighted residuals (K, L) of the parameters z (`predict`)."""
-        return self.residuals_of(self.predict(z)[0], weights)
+        """The weighted residuals (K, L), or (K, 2L) with a top displacement, of the parameters z (`predict`)."""
+        return self.residuals_of(*self.predict(z)[:2], weights)
 
-    def residuals_of(self, theta, weights):
-        """The weighted residuals (K, L) of a predicted θ (K, L): zero at the padding."""
-        return jnp.where(self.mask, theta - self.theta, 0.0) * jnp.sqrt(weights)[:, None]
+    def residuals_of(self, theta, top, weights):
+        """The weighted residuals of a predicted θ and top displacement (K, L each): zero at the padding;
+        θ's (K, L), then the top's in θ's noise units beside them (K, 2L)."""
+        r = jnp.where(self.mask, theta - self.theta, 0.0)
+        if self.top is not None:
+            r = jnp.concatenate([r, jnp.where(self.top_mask, top - self.top, 0.0) * self.top_weight], axis=1)
+        return r * jnp.sqrt(weights)[:, None]
 
 
 @eqx.filter_jit
@@ -432,13 +470,13 @@ def _solve(problem: _Problem, u0, weights, rtol, max_steps):
     sol = optx.least_squares(fn, optx.LevenbergMarquardt(rtol=rtol, atol=rtol), u0, args=weights,
                              max_steps=max_steps, throw=False, options={"jac": "fwd"})
 
-    def residuals_and_run(z):  # one forward pass gives the Jacobian, the residuals and the fitted θ
-        theta, ok = problem.predict(z)
-        r = problem.residuals_of(theta, weights)
-        return r, (r, theta, ok)
+    def residuals_and_run(z):  # one forward pass gives the Jacobian, the residuals and the fitted θ (and top)
+        theta, top, ok = problem.predict(z)
+        r = problem.residuals_of(theta, top, weights)
+        return r, (r, theta, top, ok)
 
-    J, (r, theta, ok) = jax.jacfwd(residuals_and_run, has_aux=True)(problem.natural(sol.value))
-    return sol.value, sol.result == optx.RESULTS.successful, sol.stats["num_steps"], r, J, theta, ok
+    J, (r, theta, top, ok) = jax.jacfwd(residuals_and_run, has_aux=True)(problem.natural(sol.value))
+    return sol.value, sol.result == optx.RESULTS.successful, sol.stats["num_steps"], r, J, theta, top, ok
 
 
 @dataclasses.dataclass(frozen=True)
@@ -461,10 +499,11 @@ class Identification:
         converged: whether the fit met its tolerance.
         iterations: the Levenberg–Marquardt steps.
         rms: the RMS residual [rad]; noise: the noise estimated from the samples [rad].
-        loss: "multiple" or "single" (the one "auto" kept); n_segments, n_samples: what was fitted.
+        loss: "multiple" or "single" (the one "auto" kept); n_segments, n_samples: what was fitted (θ and top samples).
         model: the model at the estimates.
         segments: the measurement's segments (`Segments`); fitted: θ of the fitted model on them (K, L).
         seconds: the wall time of the fit and of the bootstrap [s].
+        fitted_top: the fitted model's top displacement on the segments (K, L) [m]; None where none was measured.
     """
 
     free: tuple[str, ...]
@@ -488,6 +527,7 @@ class Identification:
     segments: Segments
     fitted: np.ndarray
     seconds: tuple[float, float]
+    fitted_top: np.ndarray | None = None
 
     def table(self) -> list[dict]:
         """One row per parameter: name, estimate, se, the intervals, identifiable."""
@@ -611,21 +651,27 @@ def _fit(measured, model, free, loss, x0, integrator, n_boot, seed, rtol, max_st
     seg = segments(measured, float(model.block.p_r), loss)
     real = seg.mask.any(axis=1)
     at_peak = (seg.theta0 != 0) & real
+    with_top = seg.top is not None
+    # the top's residuals weighted by σ_θ/σ_u (noise-free samples: 1/2h, the top's size per radian)
+    top_weight = seg.noise / seg.top_noise if with_top and seg.noise > 0 and seg.top_noise > 0 else 0.5 / float(model.block.h)
     problem = _Problem(model, measured.excitation, integrator, free, lo, hi, jnp.asarray(seg.t0), jnp.asarray(seg.theta0),
                        jnp.asarray(seg.ts), jnp.asarray(seg.theta), jnp.asarray(seg.mask), jnp.asarray(at_peak),
-                       jnp.asarray(model.block.alpha_r, dtype=float), 1.0 / jnp.asarray(model.block.p_r, dtype=float))
+                       jnp.asarray(model.block.alpha_r, dtype=float), 1.0 / jnp.asarray(model.block.p_r, dtype=float),
+                       jnp.asarray(seg.top) if with_top else None, jnp.asarray(seg.top_mask) if with_top else None,
+                       jnp.asarray(top_weight))
+    mask = np.concatenate([seg.mask, seg.top_mask], axis=1) if with_top else seg.mask  # the residuals' (K, L or 2L)
     K = seg.t0.size
     P = len(free)
     x0 = np.clip(np.asarray(x0, dtype=float), np.asarray(lo) + 1e-9, np.asarray(hi) - 1e-9)
     u0 = jnp.concatenate([jnp.stack([_to_open(jnp.asarray(x0[i]), lo[i], hi[i]) for i in range(P)]), jnp.zeros(2 * K)])
     tic = time.perf_counter()
-    u_hat, converged, steps, r, J, fitted, ok = _solve(problem, u0, jnp.ones(K), rtol, max_steps)
+    u_hat, converged, steps, r, J, fitted, fitted_top, ok = _solve(problem, u0, jnp.ones(K), rtol, max_steps)
     x_hat = problem.natural(u_hat)[:P]
     r, J = np.asarray(r).reshape(-1), np.asarray(J).reshape(r.size, -1)
     J = J[:, np.r_[np.arange(P), P + np.flatnonzero(at_peak), P + K + np.flatnonzero(at_peak)]]  # a start from rest has none
     seconds_fit = time.perf_counter() - tic
 
-    n = int(seg.mask.sum())
+    n = int(mask.sum())
     ssr = float(r @ r)
     s2 = ssr / max(n - J.shape[1], 1)
     x = np.asarray(x_hat)
@@ -652,7 +698,9 @@ def _fit(measured, model, free, loss, x0, integrator, n_boot, seed, rtol, max_st
     if n_boot > 0 and not singular:
         rng = np.random.default_rng(seed)
         idx = np.flatnonzero(real)
-        res = r[seg.mask.reshape(-1)]
+        L = seg.mask.shape[1]
+        res = np.asarray(r).reshape(K, -1)[:, :L][seg.mask]
+        res_top = np.asarray(r).reshape(K, -1)[:, L:][seg.top_mask] / top_weight if with_top else None
         u_b, ok_b = [], []
         for _ in range(n_boot):  # each refit reuses the fit's compilation
             interrupt.stop_point()
@@ -663,6 +711,9 @@ def _fit(measured, model, free, loss, x0, integrator, n_boot, seed, rtol, max_st
                 w[idx] = 1.0
                 noise = rng.choice(res, size=seg.mask.shape)
                 data = eqx.tree_at(lambda p: p.theta, problem, jnp.where(problem.mask, jnp.asarray(fitted) - noise, 0.0))
+                if with_top:
+                    noise = rng.choice(res_top, size=seg.mask.shape)
+                    data = eqx.tree_at(lambda p: p.top, data, jnp.where(problem.top_mask, jnp.asarray(fitted_top) - noise, 0.0))
             out = _solve(data, u_hat, jnp.asarray(w), rtol, max_steps)
             u_b.append(out[0])
             ok_b.append(bool(out[1]))
@@ -682,7 +733,7 @@ def _fit(measured, model, free, loss, x0, integrator, n_boot, seed, rtol, max_st
         converged=bool(converged) and bool(np.all(np.asarray(ok)[real])), iterations=int(steps),
         rms=math.sqrt(ssr / max(n, 1)), noise=seg.noise, loss=loss, n_segments=int(real.sum()), n_samples=n,
         model=with_values(model, free, x_hat), segments=seg, fitted=np.asarray(fitted),
-        seconds=(seconds_fit, seconds_boot))
+        fitted_top=np.asarray(fitted_top) if with_top else None, seconds=(seconds_fit, seconds_boot))
 
 
 def eta_from_peaks(peaks, alpha) -> tuple[float, np.ndarray]:

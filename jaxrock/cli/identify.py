@@ -31,20 +31,23 @@ SPRING_BACKBONE = "tanh"  # identify refuses a kinked backbone: its spring model
 # a measurement's columns (CSV header, netCDF variable): spelling → (quantity, unit)
 COLUMNS = {"t": ("t", "s"), "time": ("t", "s"), "t[s]": ("t", "s"), "time[s]": ("t", "s"),
            "theta": ("theta", "rad"), "theta[rad]": ("theta", "rad"),
+           "top": ("top", "m"), "top[m]": ("top", "m"), "u_top": ("top", "m"), "u_top[m]": ("top", "m"),
            "ag": ("ag", "m/s2"), "ag[m/s2]": ("ag", "m/s2"), "ground_acceleration": ("ag", "m/s2"), "ag[g]": ("ag", "g")}
-EXPECTED = "columns t [s] and theta [rad], optionally ag [m/s²] or ag[g] [g]"
-MISSING = ("", "nan", "na", "n/a", "-")  # a theta cell that is a missing sample (read as NaN)
+EXPECTED = "columns t [s] and theta [rad], optionally top [m] (the top displacement) and ag [m/s²] or ag[g] [g]"
+MISSING = ("", "nan", "na", "n/a", "-")  # a theta or top cell that is a missing sample (read as NaN)
 
 
 class Measurement(NamedTuple):
     """A measured history as read: times [s], θ [rad] (NaN: missing), the ground acceleration in
-    `ag_units` (None: not measured), and the line (CSV) or sample (netCDF) of each time."""
+    `ag_units` (None: not measured), the line (CSV) or sample (netCDF) of each time, and the top
+    displacement [m] (NaN: missing; None: not measured)."""
 
     t: np.ndarray
     theta: np.ndarray
     ag: np.ndarray | None
     ag_units: str
     lines: list[int]
+    top: np.ndarray | None = None
 
 
 def _column_key(name: str) -> str:
@@ -88,6 +91,8 @@ def _check(path: Path, m: Measurement, where: str) -> Measurement:
                                 f"{m.t[k]:g} s; t must be strictly increasing")
     if not np.any(np.isfinite(m.theta)):
         raise JaxrockInputError(f"MEASURED {path}: theta holds no finite sample")
+    if m.top is not None and not np.any(np.isfinite(m.top)):
+        raise JaxrockInputError(f"MEASURED {path}: top holds no finite sample")
     if m.ag is not None and not np.all(np.isfinite(m.ag)):
         k = int(np.flatnonzero(~np.isfinite(m.ag))[0])
         raise JaxrockInputError(f"MEASURED {path}: {where} {m.lines[k]}: ag = {m.ag[k]}; a measured ground acceleration must be "
@@ -114,18 +119,19 @@ def _read_csv(path: Path) -> Measurement:
             raise JaxrockInputError(f"MEASURED {path}: line {n}: {len(r)} value(s) for {len(header)} columns ({', '.join(header)})")
         for q, i in index.items():
             cell = r[i].strip()
-            if q == "theta" and cell.lower() in MISSING:
+            if q in ("theta", "top") and cell.lower() in MISSING:
                 values[q].append(math.nan)
                 continue
             try:
                 values[q].append(float(cell))
             except ValueError:
                 raise JaxrockInputError(f"MEASURED {path}: line {n}: {header[i]} = {cell!r} is not a number"
-                                        + ("; a missing θ sample is an empty cell or nan" if q == "theta" else "")) from None
+                                        + ("; a missing sample is an empty cell or nan" if q in ("theta", "top") else "")) from None
         lines.append(n)
     ag_units = next((u for q, u in found.values() if q == "ag"), "m/s2")
     return _check(path, Measurement(np.asarray(values["t"]), np.asarray(values["theta"]),
-                                    np.asarray(values["ag"]) if "ag" in values else None, ag_units, lines), "line")
+                                    np.asarray(values["ag"]) if "ag" in values else None, ag_units, lines,
+                                    np.asarray(values["top"]) if "top" in values else None), "line")
 
 
 def _read_netcdf(path: Path) -> Measurement:
@@ -159,15 +165,15 @@ def _read_netcdf(path: Path) -> Measurement:
     if len(set(sizes.values())) > 1:
         raise JaxrockInputError(f"MEASURED {path}: the variables have different lengths ({sizes}); expected one time axis")
     ag_units = next((u for q, u in found.values() if q == "ag"), "m/s2")
-    return _check(path, Measurement(arrays["t"], arrays["theta"], arrays.get("ag"), ag_units, list(range(1, arrays["t"].size + 1))),
-                  "sample")
+    return _check(path, Measurement(arrays["t"], arrays["theta"], arrays.get("ag"), ag_units, list(range(1, arrays["t"].size + 1)),
+                                    arrays.get("top")), "sample")
 
 
 def read_measured(path) -> Measurement:
-    """A measured history from a CSV file (a header `t,theta[,ag | ag[g]]`; `#` lines are comments;
-    an empty or `nan` θ is a missing sample) or a netCDF-3 file (`.nc`: variables `t` or `time`,
-    `theta`, optional `ag` in m/s², or in g where its `units` say so), checked. `jaxrock simulate
-    --save` files read as they are (`ground_acceleration`). Imports no JAX."""
+    """A measured history from a CSV file (a header `t,theta[,top][,ag | ag[g]]`; `#` lines are comments;
+    an empty or `nan` θ or top is a missing sample) or a netCDF-3 file (`.nc`: variables `t` or `time`,
+    `theta`, optional `top` or `u_top` [m], optional `ag` in m/s², or in g where its `units` say so), checked.
+    `jaxrock simulate --save` files read as they are (`ground_acceleration`, `u_top`). Imports no JAX."""
     from .._validate import JaxrockInputError
 
     path = Path(path)
@@ -237,7 +243,7 @@ def identify(
     measured: Path = typer.Argument(..., show_default=False,
                                     help=f"the measured history: a CSV with {EXPECTED} at the same times ('#' lines are comments; an "
                                     "empty or nan θ is a missing sample, skipped), or a netCDF-3 file (.nc: variables t or time, theta, "
-                                    "optional ag; netCDF-4/HDF5 files are not read: jaxrock's dependencies read netCDF-3 only). "
+                                    "optional top or u_top [m] and ag; netCDF-4/HDF5 files are not read: jaxrock's dependencies read netCDF-3 only). "
                                     "Without ag nor --record the test is free rocking"),
     free: str = typer.Option(..., help=f"the parameters to fit, comma-separated: {', '.join(FREE_NAMES)} (eta: rigid; cbar, smoothing: "
                              "spring models; zeta, E: spring-flexible; height: 2h at fixed slenderness, any model); they start from "
@@ -293,7 +299,7 @@ def identify(
     from ..io.tables import write_table
 
     t0 = time.perf_counter()
-    res = fit(Measured(data.t, data.theta, exc), m, names, loss=loss.value, n_boot=boot, seed=seed, warn=False)
+    res = fit(Measured(data.t, data.theta, exc, top=data.top), m, names, loss=loss.value, n_boot=boot, seed=seed, warn=False)
     seconds = time.perf_counter() - t0
     base = "" if tan_alpha_base is None else f", tanα′ = {tan_alpha_base:g}"
     what = (f"{kind} model{f' ({SPRING_BACKBONE} backbone)' if spring else ''}, 2h = {height:g} m, tanα = {tan_alpha:g}{base}; "
