@@ -272,6 +272,7 @@ def test_flexible_derivatives_through_the_kinks_match_central_differences():
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # reached the 300 s default in CI beside another worker (compiles two programs)
 def test_flexible_reverse_mode_is_forward_mode():
     """Generalized-α in reverse mode (`autodiff="reverse"`: the run's loop checkpointed, the Newton
     iteration's bounded) runs the same iterations as in forward mode: on the flexible column
