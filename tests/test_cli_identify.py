@@ -63,12 +63,6 @@ def test_free_rocking_eta_is_identified_within_its_interval(tmp_path):
     assert png.is_file() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-# a known defect (issue 62): at this noise (1e-4 rad, se ≈ 4e-4) the multiple-shooting fit from η = 0.8
-# stops in a local minimum: seeds 1–8 gave η − 0.9 = −3.7, −7.4, −5.7, −1.8, −12.3, −3.0, +0.06, −2.3 se
-# with an RMS up to 1.37 σ; from η = 0.9 seed 5 gives +1.1 se at 0.93 σ, and a restart from the stop
-# does not move (its SSR 7.29e-6 against 3.42e-6); "auto"'s single-run polish gives 0.89982 with a
-# 1e-6 se. Strict: the test turns red once the fit is repaired, and the marker goes.
-@pytest.mark.xfail(strict=True, reason="issue 62: the multiple-shooting fit stops in a local minimum on this ground motion")
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_ground_motion_column_is_the_excitation(tmp_path):
