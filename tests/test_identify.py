@@ -67,12 +67,12 @@ def test_segments_carry_the_top_displacement():
     assert segments(jr.Measured(t, theta), float(BLOCK.p_r)).top is None
 
 
+@pytest.mark.slow  # 40 s cold: the default run is at its 10 minutes
 def test_history_derivatives_on_a_record_are_central_differences():
     """The forward model's derivatives w.r.t. η and a segment's start (t₀, θ₀) on a sampled record are
     the central differences of its values, through impacts and apexes, in forward and reverse mode
     (issue 62: diffrax's step placement on the record's samples had corrupted them after an apex,
-    dθ/dt₀ 0.42 against 0.148, and the fits stopped where the wrong gradient vanished). On a record
-    whose üg is zero after 0.5 s, the still ground's derivatives are the reference too."""
+    dθ/dt₀ 0.42 against 0.148, and the fits stopped where the wrong gradient vanished)."""
     import jax
     import jax.numpy as jnp
 
@@ -81,20 +81,18 @@ def test_history_derivatives_on_a_record_are_central_differences():
     record = jr.Record(np.where(t < 0.5, 1.5 * 0.15 * 9.81 * np.sin(2 * np.pi * t / 0.5), 0.0), dt)
     ts = jnp.asarray(np.arange(3.07, 3.75, dt))  # an impact near 3.23 s, an apex near 3.38 s, an impact near 3.52 s
 
-    def theta(z, excitation, autodiff="forward"):
+    def theta(z, autodiff="forward"):
         model = jr.RigidModel(BLOCK, eta=z[0])
-        return history(model, excitation, ts, start=(3.06179388 + z[1], -0.0923 * ALPHA + z[2], 0.0),
+        return history(model, record, ts, start=(3.06179388 + z[1], -0.0923 * ALPHA + z[2], 0.0),
                        integrator=model.default_integrator(autodiff=autodiff))[0]
 
     z = jnp.asarray([0.9, 0.0, 0.0])
-    f = jax.jit(lambda z: theta(z, record))
+    f = jax.jit(theta)
     J = np.asarray(jax.jacfwd(f)(z))
     h = 1e-6
     fd = np.stack([(np.asarray(f(z.at[i].add(h))) - np.asarray(f(z.at[i].add(-h)))) / (2 * h) for i in range(3)], axis=1)
     assert np.max(np.abs(J - fd), axis=0) == pytest.approx(0.0, abs=1e-6), np.max(np.abs(J - fd), axis=0)
-    still = np.asarray(jax.jacfwd(lambda z: theta(z, jr.StillGround()))(z))
-    assert np.max(np.abs(J - still)) < 1e-6
-    reverse = np.asarray(jax.jacrev(lambda z: theta(z, record, "reverse"))(z))
+    reverse = np.asarray(jax.jacrev(lambda z: theta(z, "reverse"))(z))
     assert np.max(np.abs(reverse - J)) < 1e-6
 
 
