@@ -160,9 +160,11 @@ def _save(ts, fields=("theta",)) -> Save:
 def default_integrator(model: AbstractModel):
     """The forward-mode integrator of identification runs: the rigid model's `EventIntegrator`, or
     for spring models the free-rocking calibration's solver (Tsit5 at 1e-9 for the quasi-rigid,
-    Kvaerno5 at 1e-7 for a column: `jaxrock.analyses.free_rocking.default_integrator`)."""
+    Kvaerno5 at 1e-7 for a column: `jaxrock.analyses.free_rocking.default_integrator`). The rigid
+    one's steps are not placed on a record's samples (`on_samples=False`): diffrax's placement
+    corrupts the derivatives after an apex, and the fits stopped where the wrong gradient vanished."""
     if isinstance(model, RigidModel):
-        return model.default_integrator(autodiff="forward")
+        return dataclasses.replace(model.default_integrator(autodiff="forward"), on_samples=False)
     from .free_rocking import default_integrator as spring_default
 
     return dataclasses.replace(spring_default(model), autodiff="forward")
