@@ -154,7 +154,7 @@ def test_summary_agrees_with_history(kind, pulse):
 
 # more random scenes, in batches of the default sizes (one compiled program per kind and pulse; each
 # batch is one test, well inside the per-test limit): the first 4 batches of each kind (640 rigid and
-# 128 quasi-rigid SM scenes per pulse, 85 s) in the slow set, the other 3520 and 832 a study
+# 128 quasi-rigid SM scenes per pulse, 85 s) in the slow set, the other 2880 and 704 a study
 # (`pytest -m study`, 591 s of CI's slow set on 2 cores: one rigid batch took 268 s)
 CI_BATCHES = 4
 SLOW_BATCHES = [pytest.param(kind, k, marks=pytest.mark.slow if k < CI_BATCHES else pytest.mark.study)
